@@ -1,0 +1,265 @@
+//! The run configuration: a TOML file read strictly (unknown keys are errors) and validated into a
+//! [`RunConfig`] before anything runs. Every error is one line naming the key.
+
+use std::path::{Path, PathBuf};
+
+use amorph::genome::MutationParams;
+use amorph::scene::Scene;
+use serde::{Deserialize, Serialize};
+
+use crate::search::{MigrationParams, ResolutionSchedule};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("cannot read config {path}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("config {path}, line {line}: {message}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    #[error("config {path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+}
+
+pub type Result<T> = std::result::Result<T, ConfigError>;
+
+/// The file as written: every section and key, with defaults for what may be left out.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawConfig {
+    /// Name of the run; results go to `<results_dir>/<name>/`.
+    pub name: String,
+    /// The one seed every random choice of the run derives from.
+    #[serde(default)]
+    pub seed: u64,
+    /// Folder that receives one sub-folder per run.
+    #[serde(default = "default_results_dir")]
+    pub results_dir: PathBuf,
+    #[serde(default)]
+    pub evaluation: EvaluationSection,
+    #[serde(default)]
+    pub search: SearchSection,
+    #[serde(default)]
+    pub budget: BudgetSection,
+    pub resolution: ResolutionSchedule,
+    pub scene: Scene,
+}
+
+fn default_results_dir() -> PathBuf {
+    PathBuf::from("results")
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EvaluationSection {
+    /// Local evaluation threads; 0 = one per core.
+    pub threads: usize,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SearchSection {
+    /// Individuals per island (paper: 50).
+    pub population: usize,
+    /// Number of islands.
+    pub islands: usize,
+    /// Children each island breeds per epoch (evaluated in parallel).
+    pub children_per_epoch: usize,
+    /// Gaussian points in each initial random genome.
+    pub initial_points: usize,
+    pub mutation: MutationParams,
+    pub migration: MigrationParams,
+}
+
+impl Default for SearchSection {
+    fn default() -> Self {
+        Self {
+            population: 50,
+            islands: 1,
+            children_per_epoch: 50,
+            initial_points: 40,
+            mutation: MutationParams::default(),
+            migration: MigrationParams::default(),
+        }
+    }
+}
+
+/// When to stop; the first limit reached ends the run. At least one must be set.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BudgetSection {
+    /// Total evaluations, including the initial population and re-evaluations at a new resolution.
+    pub evaluations: Option<u64>,
+    /// Wall-clock seconds (the one limit that depends on machine speed).
+    pub wall_seconds: Option<f64>,
+    /// Stop once the best design's RMS error (beam task, finest resolution) is at most this, %.
+    pub target_rms_percent: Option<f64>,
+}
+
+/// A validated configuration: what [`crate::run`] accepts.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunConfig {
+    pub raw: RawConfig,
+    /// Where this config came from, for messages.
+    pub source: PathBuf,
+}
+
+impl RunConfig {
+    /// Reads, parses and validates a config file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and validates config text; `path` only names the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        let raw: RawConfig = toml::from_str(text).map_err(|e| {
+            let line = e.span().map_or(0, |s| {
+                text[..s.start.min(text.len())].matches('\n').count() + 1
+            });
+            ConfigError::Parse {
+                path: path.to_owned(),
+                line,
+                message: e.message().replace('\n', " "),
+            }
+        })?;
+        Self::try_from_raw(raw, path)
+    }
+
+    pub fn try_from_raw(raw: RawConfig, path: &Path) -> Result<Self> {
+        validate(&raw).map_err(|message| ConfigError::Invalid {
+            path: path.to_owned(),
+            message,
+        })?;
+        Ok(Self {
+            raw,
+            source: path.to_owned(),
+        })
+    }
+
+    /// The folder this run writes its results into.
+    pub fn run_dir(&self) -> PathBuf {
+        self.raw.results_dir.join(&self.raw.name)
+    }
+}
+
+fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
+    let s = &raw.search;
+    if raw.name.is_empty() || raw.name.contains(['/', '\\']) || raw.name.starts_with('.') {
+        return Err(format!("name = {:?} must be a plain folder name", raw.name));
+    }
+    if s.population < 2 {
+        return Err("search.population must be at least 2".into());
+    }
+    if s.islands == 0 {
+        return Err("search.islands must be at least 1".into());
+    }
+    if s.children_per_epoch == 0 {
+        return Err("search.children_per_epoch must be at least 1".into());
+    }
+    let limits = raw.scene.limits();
+    if s.initial_points == 0 || s.initial_points > limits.max_points {
+        return Err(format!(
+            "search.initial_points must be between 1 and scene.limits.max_points ({})",
+            limits.max_points
+        ));
+    }
+    s.mutation
+        .validate()
+        .map_err(|field| format!("search.mutation.{field} is out of range"))?;
+    if let crate::search::Topology::Random { probability } = s.migration.topology
+        && !(0.0..=1.0).contains(&probability)
+    {
+        return Err("search.migration.topology.probability must be in [0, 1]".into());
+    }
+    let b = &raw.budget;
+    if b.evaluations.is_none() && b.wall_seconds.is_none() && b.target_rms_percent.is_none() {
+        return Err(
+            "budget: set at least one of evaluations, wall_seconds, target_rms_percent".into(),
+        );
+    }
+    let initial = (s.islands * s.population) as u64;
+    if let Some(n) = b.evaluations
+        && n < initial
+    {
+        return Err(format!(
+            "budget.evaluations = {n} does not cover the initial populations ({} islands x {} individuals)",
+            s.islands, s.population
+        ));
+    }
+    if let Some(w) = b.wall_seconds
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err("budget.wall_seconds must be a positive number".into());
+    }
+    if let Some(t) = b.target_rms_percent
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err("budget.target_rms_percent must be a non-negative number".into());
+    }
+    raw.resolution.validate()?;
+    raw.scene.validate().map_err(|e| format!("scene: {e}"))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+name = "t"
+[budget]
+evaluations = 100
+[resolution]
+levels = [[6, 6, 20]]
+[scene]
+kind = "beam"
+target = "straight"
+"#;
+
+    #[test]
+    fn a_minimal_config_is_accepted_with_paper_defaults() {
+        let c = RunConfig::parse(MINIMAL, Path::new("t.toml")).unwrap();
+        assert_eq!(c.raw.search.population, 50);
+        assert_eq!(c.raw.search.mutation.probability, 0.2);
+    }
+
+    #[test]
+    fn an_unknown_key_is_one_line_naming_it() {
+        let text = MINIMAL.replace("[budget]", "[budget]\nevaluation = 3");
+        let err = RunConfig::parse(&text, Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("evaluation") && err.contains("line 4"),
+            "{err}"
+        );
+        assert!(!err.contains('\n'), "{err}");
+    }
+
+    #[test]
+    fn an_invalid_value_names_the_key() {
+        let text = MINIMAL.replace("evaluations = 100", "evaluations = 10");
+        let err = RunConfig::parse(&text, Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("budget.evaluations"), "{err}");
+    }
+
+    #[test]
+    fn an_unknown_target_is_named() {
+        let text = MINIMAL.replace("\"straight\"", "\"wavy\"");
+        let err = RunConfig::parse(&text, Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("wavy"), "{err}");
+    }
+}

@@ -1,0 +1,218 @@
+//! The results folder of a run: written as the run goes, so a killed run keeps its history and its
+//! best design so far.
+//!
+//! ```text
+//! results/<name>/
+//!   config.toml           the effective configuration (defaults filled in)
+//!   history.csv           per epoch and island: evaluations, wall time, resolution, best and mean fitness
+//!   best_genome.json      the best genome so far (updated whenever it improves)
+//!   island-<i>-best.json  each island's best genome at the end
+//!   population.json       every island's final population with outcomes
+//!   best_voxels.json      the best design voxelized at the final resolution
+//!   profile.csv           beam task: its top-surface profile against the target
+//!   summary.json, summary.md   the final table
+//! ```
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+
+use amorph::beam::beam_design;
+use amorph::genome::Genome;
+use amorph::outcome::Outcome;
+use amorph::scene::Scene;
+use amorph::voxel::{GridDims, VoxelGrid};
+use serde::Serialize;
+
+use crate::config::RunConfig;
+use crate::run::{HistoryRow, RunSummary};
+use crate::search::Individual;
+
+#[derive(Debug)]
+pub struct ResultWriter {
+    dir: PathBuf,
+    history: BufWriter<File>,
+    best_rank: f64,
+    best_dims: Option<GridDims>,
+    config: RunConfig,
+}
+
+#[derive(Serialize)]
+struct SavedIndividual<'a> {
+    genome: &'a Genome,
+    outcome: &'a Outcome,
+}
+
+impl ResultWriter {
+    pub fn create(config: &RunConfig) -> std::io::Result<Self> {
+        let dir = config.run_dir();
+        std::fs::create_dir_all(&dir)?;
+        let text = toml::to_string_pretty(&config.raw).map_err(std::io::Error::other)?;
+        std::fs::write(dir.join("config.toml"), text)?;
+        let mut history = BufWriter::new(File::create(dir.join("history.csv"))?);
+        writeln!(
+            history,
+            "epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_rms_percent,mean_fitness,replacements"
+        )?;
+        Ok(Self {
+            dir,
+            history,
+            best_rank: f64::NEG_INFINITY,
+            best_dims: None,
+            config: config.clone(),
+        })
+    }
+
+    pub fn dir(&self) -> &std::path::Path {
+        &self.dir
+    }
+
+    pub fn history(&mut self, row: &HistoryRow) -> std::io::Result<()> {
+        let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
+        writeln!(
+            self.history,
+            "{},{},{:.3},{},{},{},{},{},{}",
+            row.epoch,
+            row.evaluations,
+            row.wall_seconds,
+            row.resolution,
+            row.island,
+            opt(row.best_fitness),
+            opt(row.best_rms_percent),
+            opt(row.mean_fitness),
+            row.replacements
+        )?;
+        self.history.flush()
+    }
+
+    /// Saves the best design whenever the run's best improves (ranks are compared per resolution,
+    /// so a resolution switch starts the comparison afresh).
+    pub fn best_so_far(&mut self, best: &Individual, dims: GridDims) -> std::io::Result<()> {
+        let rank = best.outcome.rank();
+        if rank > self.best_rank || self.best_dims != Some(dims) {
+            self.best_rank = rank;
+            self.best_dims = Some(dims);
+            write_json(
+                &self.dir.join("best_genome.json"),
+                &serde_json::json!({
+                    "resolution": [dims.nx, dims.ny, dims.nz],
+                    "genome": best.genome,
+                    "outcome": best.outcome,
+                }),
+            )?;
+        }
+        Ok(())
+    }
+
+    pub fn finish(&mut self, summary: &RunSummary, scene: &Scene) -> std::io::Result<()> {
+        let best = summary.best();
+        write_json(
+            &self.dir.join("best_genome.json"),
+            &SavedIndividual {
+                genome: &best.genome,
+                outcome: &best.outcome,
+            },
+        )?;
+        for (i, pop) in summary.populations.iter().enumerate() {
+            let island_best = pop.iter().fold(&pop[0], |b, ind| {
+                if ind.outcome.is_fitter_than(&b.outcome) {
+                    ind
+                } else {
+                    b
+                }
+            });
+            write_json(
+                &self.dir.join(format!("island-{i}-best.json")),
+                &SavedIndividual {
+                    genome: &island_best.genome,
+                    outcome: &island_best.outcome,
+                },
+            )?;
+        }
+        let populations: Vec<Vec<SavedIndividual>> = summary
+            .populations
+            .iter()
+            .map(|p| {
+                p.iter()
+                    .map(|i| SavedIndividual {
+                        genome: &i.genome,
+                        outcome: &i.outcome,
+                    })
+                    .collect()
+            })
+            .collect();
+        write_json(&self.dir.join("population.json"), &populations)?;
+
+        let Scene::Beam(beam) = scene;
+        let grid = beam_design(&best.genome, beam, summary.dims);
+        write_json(
+            &self.dir.join("best_voxels.json"),
+            &voxels_json(&grid, scene),
+        )?;
+        let metrics = best.outcome.beam_metrics();
+        if let Some(m) = metrics {
+            let mut csv = String::from("t,simulated,target\n");
+            for [t, w, f] in &m.profile {
+                csv.push_str(&format!("{t},{w},{f}\n"));
+            }
+            std::fs::write(self.dir.join("profile.csv"), csv)?;
+        }
+        let rms = metrics.map(|m| m.rms_percent);
+        let paper = beam.target.paper_rms_percent();
+        let json = serde_json::json!({
+            "name": self.config.raw.name,
+            "target": beam.target.name(),
+            "stop": summary.stop,
+            "epochs": summary.epochs,
+            "evaluations": summary.evaluations,
+            "wall_seconds": summary.wall_seconds,
+            "resolution": summary.dims.to_string(),
+            "best_fitness": best.outcome.fitness(),
+            "best_rms_percent": rms,
+            "paper_rms_percent": paper,
+            "voxels": metrics.map(|m| m.voxels),
+            "material_counts": metrics.map(|m| m.material_counts.clone()),
+        });
+        write_json(&self.dir.join("summary.json"), &json)?;
+        let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} %"));
+        let md = format!(
+            "# Run `{}`\n\n| target | best RMS error | paper (simulated) | evaluations | wall time | resolution | stop |\n|---|---|---|---|---|---|---|\n| {} | {} | {} | {} | {:.1} s | {} | {:?} |\n",
+            self.config.raw.name,
+            beam.target.name(),
+            fmt(rms),
+            fmt(paper),
+            summary.evaluations,
+            summary.wall_seconds,
+            summary.dims,
+            summary.stop,
+        );
+        std::fs::write(self.dir.join("summary.md"), md)
+    }
+}
+
+/// A readable voxel file: for each Z layer (bottom up), one string per Y row with a character per
+/// X cell: `.` empty, `0`–`9`/`a`–`f` the material index.
+fn voxels_json(grid: &VoxelGrid, scene: &Scene) -> serde_json::Value {
+    let d = grid.dims();
+    let layers: Vec<Vec<String>> = (0..d.nz)
+        .map(|z| {
+            (0..d.ny)
+                .map(|y| {
+                    (0..d.nx)
+                        .map(|x| match grid.get(x, y, z) {
+                            None => '.',
+                            Some(m) => char::from_digit(u32::from(m.0), 16).unwrap_or('?'),
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+        .collect();
+    let materials: Vec<&str> = scene.palette().0.iter().map(|m| m.name.as_str()).collect();
+    serde_json::json!({ "dims": [d.nx, d.ny, d.nz], "materials": materials, "layers_z_up": layers })
+}
+
+fn write_json(path: &std::path::Path, value: &impl Serialize) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(std::io::Error::other)?;
+    std::fs::write(path, text)
+}

@@ -1,0 +1,74 @@
+//! The `coordinator` binary as a user runs it: bad input gives one clear line and a failure code.
+
+use std::process::Command;
+
+fn coordinator(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("coordinator runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn write_config(name: &str, text: &str) -> std::path::PathBuf {
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+const GOOD: &str = r#"
+name = "cli"
+[search]
+population = 4
+children_per_epoch = 3
+[budget]
+evaluations = 10
+[resolution]
+levels = [[4, 4, 12]]
+[scene]
+kind = "beam"
+target = "straight"
+"#;
+
+#[test]
+fn a_misspelt_key_is_one_line_naming_it() {
+    let path = write_config("misspelt.toml", &GOOD.replace("evaluations", "evalutions"));
+    let (ok, stderr) = coordinator(&["--config", path.to_str().unwrap()]);
+    assert!(!ok);
+    let errors: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(
+        errors[0].contains("evalutions") && errors[0].contains("line 7"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_missing_config_file_is_named() {
+    let (ok, stderr) = coordinator(&["--config", "/nonexistent/run.toml"]);
+    assert!(!ok);
+    assert!(stderr.contains("/nonexistent/run.toml"), "{stderr}");
+}
+
+#[test]
+fn a_small_run_completes_and_reports_its_results_folder() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-results");
+    let text = format!("results_dir = \"{}\"\n{GOOD}", dir.display());
+    let path = write_config("good.toml", &text);
+    let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
+        .args(["--config", path.to_str().unwrap(), "--threads", "2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("after 10 evaluations"), "{stdout}");
+    assert!(dir.join("cli").join("summary.md").is_file());
+}

@@ -1,0 +1,408 @@
+//! Dynamics benchmarks (single thread).
+//!
+//! `cargo bench -p amorph --bench dynamics` runs the criterion step benchmarks: the per-pass cost
+//! table on a 10³ block and the N = 10 and N = 20 blocks of the issue (voxel-steps/s as
+//! throughput). Extra modes, selected by a free argument after `--`:
+//! - `eval`: one paper-style locomotion evaluation of a random 20³-workspace robot, timed;
+//! - `study`: the error-against-run-time study: CSV and an SVG plot under
+//!   `$CARGO_TARGET_DIR/dynamics-study/` (or `target/dynamics-study/`).
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use amorph::dynamics::{DynamicScene, Pass, Simulation, foam_palette, simulate_locomotion};
+use amorph::genome::{GenomeLimits, random_genome};
+use amorph::material::{Material, MaterialId, Palette};
+use amorph::voxel::{DEFAULT_THRESHOLD, GridDims, VoxelGrid, keep_largest_component, voxelize};
+use criterion::{Criterion, Throughput};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// The issue's speed scene: an N³ block on the floor with gravity, friction 1.0/0.3, voxels with
+/// x < N/2 actuated ±20 % at a 0.5 s period, s = 0.01 m, E = 1 MPa, ν = 0.35, ρ = 1000.
+fn speed_block(n: usize) -> Simulation {
+    let mut passive = Material::new("passive", 1.0e6, 0.35);
+    passive.static_friction = 1.0;
+    passive.kinetic_friction = 0.3;
+    let mut active = passive.clone();
+    active.actuated = true;
+    let dims = GridDims::new(n, n, n);
+    let mut grid = VoxelGrid::empty(dims);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                grid.set(x, y, z, Some(MaterialId(u8::from(x < n / 2))));
+            }
+        }
+    }
+    let scene = DynamicScene {
+        voxel_size: 0.01,
+        actuation: Some(amorph::dynamics::Actuation {
+            amplitude_volume: 0.2,
+            period: 0.5,
+            phase: 0.0,
+        }),
+        ..DynamicScene::paper_locomotion()
+    };
+    let mut sim = Simulation::new(&grid, &Palette(vec![passive, active]), &scene).unwrap();
+    sim.start_actuation();
+    // Let it land so floor contact and friction are exercised.
+    sim.run_steps(200).unwrap();
+    sim
+}
+
+fn bench_blocks(c: &mut Criterion) {
+    let mut group = c.benchmark_group("dynamics_step");
+    for n in [10, 20] {
+        let mut sim = speed_block(n);
+        group.throughput(Throughput::Elements((n * n * n) as u64));
+        group.bench_function(format!("block_{n}x{n}x{n}_floor_friction_actuated"), |b| {
+            b.iter(|| black_box(sim.step()))
+        });
+    }
+    group.finish();
+}
+
+fn bench_passes(c: &mut Criterion) {
+    let mut group = c.benchmark_group("dynamics_pass_10x10x10");
+    group.throughput(Throughput::Elements(1000));
+    let full = speed_block(10);
+    let links = |damped, actuated| Pass::Links { damped, actuated };
+    let cases: Vec<(&str, Vec<Pass>)> = vec![
+        ("all_passes", full.passes().to_vec()),
+        ("integrate_only", vec![Pass::Integrate]),
+        ("links_plain", vec![links(false, false), Pass::Integrate]),
+        ("links_damped", vec![links(true, false), Pass::Integrate]),
+        (
+            "links_damped_actuated",
+            vec![links(true, true), Pass::Integrate],
+        ),
+        ("gravity", vec![Pass::Gravity, Pass::Integrate]),
+        ("floor_friction", vec![Pass::Floor, Pass::Integrate]),
+    ];
+    for (name, passes) in cases {
+        let mut sim = full.clone();
+        sim.set_passes(passes);
+        group.bench_function(name, |b| b.iter(|| black_box(sim.step())));
+    }
+    // Self-collision is off in the speed scene; measure it on the same block with it on.
+    let mut with_collisions = speed_block_with_collisions();
+    with_collisions.set_passes(vec![Pass::Collisions, Pass::Integrate]);
+    group.bench_function("collisions", |b| {
+        b.iter(|| black_box(with_collisions.step()))
+    });
+    // A scene with everything off builds exactly the plain link pass and the integration.
+    let grid = VoxelGrid::filled(GridDims::new(10, 10, 10), MaterialId(0));
+    let mut off = Simulation::new(
+        &grid,
+        &Palette(vec![Material::new("m", 1.0e6, 0.35)]),
+        &DynamicScene::free_space(0.01),
+    )
+    .unwrap();
+    assert_eq!(off.passes(), &[links(false, false), Pass::Integrate]);
+    group.bench_function("scene_everything_off", |b| b.iter(|| black_box(off.step())));
+    group.finish();
+}
+
+fn speed_block_with_collisions() -> Simulation {
+    let grid = VoxelGrid::filled(GridDims::new(10, 10, 10), MaterialId(0));
+    let scene = DynamicScene {
+        voxel_size: 0.01,
+        collisions: true,
+        ..DynamicScene::default()
+    };
+    Simulation::new(
+        &grid,
+        &Palette(vec![Material::new("m", 1.0e6, 0.35)]),
+        &scene,
+    )
+    .unwrap()
+}
+
+/// A reproducible paper-style robot: 88 random Gaussian points in a 20³ workspace, two foams,
+/// largest body kept.
+fn paper_robot(seed: u64) -> VoxelGrid {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let genome = random_genome(&mut rng, 88, &GenomeLimits::default(), 2);
+    let grid = voxelize(&genome, GridDims::new(20, 20, 20), 2, DEFAULT_THRESHOLD);
+    keep_largest_component(&grid)
+}
+
+fn paper_evaluation() {
+    let grid = (0..20)
+        .map(paper_robot)
+        .max_by_key(|g| g.filled_count())
+        .unwrap();
+    let scene = DynamicScene::paper_locomotion();
+    let start = Instant::now();
+    let outcome = simulate_locomotion(&grid, &foam_palette(), &scene);
+    let wall = start.elapsed().as_secs_f64();
+    println!(
+        "paper-style evaluation: {} voxels, {} steps ({:.3} s simulated, dt {:.3e} s), {:.1} s wall, \
+         {:.3e} voxel-steps/s, status {:?}, fitness {:.4e} m, speed {:.3} %/cycle",
+        outcome.voxel_count,
+        outcome.steps,
+        outcome.simulated_time,
+        outcome.dt,
+        wall,
+        outcome.voxel_count as f64 * outcome.steps as f64 / wall,
+        outcome.status,
+        outcome.fitness,
+        outcome.speed_percent_per_cycle
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "study") {
+        study();
+        return;
+    }
+    if args.iter().any(|a| a == "eval") {
+        paper_evaluation();
+        return;
+    }
+    let mut c = Criterion::default().configure_from_args();
+    bench_passes(&mut c);
+    bench_blocks(&mut c);
+    c.final_summary();
+}
+
+/// One run of the study: its parameters, the error and the wall time.
+struct StudyPoint {
+    case: &'static str,
+    resolution: usize,
+    dt_fraction: f64,
+    steps: u64,
+    wall: f64,
+    value: f64,
+    error: f64,
+}
+
+/// Static tip deflection of the 2r×20r×2r cantilever (the issue's beam at r times the
+/// resolution), settled with near-critical global damping, against F L³/(3EI).
+fn cantilever_run(r: usize, dt_fraction: f64) -> StudyPoint {
+    let s = 0.01 / r as f64;
+    let mut m = Material::new("rubber", 1.0e6, 0.35);
+    m.density = 1000.0;
+    let grid = VoxelGrid::filled(GridDims::new(2 * r, 20 * r, 2 * r), MaterialId(0));
+    let scene = DynamicScene {
+        dt_fraction,
+        damping: amorph::dynamics::DampingParams {
+            link: 1.0,
+            global: 0.005 / r as f64,
+            contact: 0.0,
+        },
+        ..DynamicScene::free_space(s)
+    };
+    let mut sim = Simulation::new(&grid, &Palette(vec![m]), &scene).unwrap();
+    let mut tip = Vec::new();
+    for z in 0..2 * r {
+        for x in 0..2 * r {
+            sim.fix_voxel(sim.voxel_at([x, 0, z]).unwrap()).unwrap();
+            tip.push(sim.voxel_at([x, 20 * r - 1, z]).unwrap());
+        }
+    }
+    let per_voxel = 0.01 / tip.len() as f64;
+    for &i in &tip {
+        sim.add_external_force(i, amorph::dynamics::Vec3::new(0.0, 0.0, -per_voxel))
+            .unwrap();
+    }
+    let start = Instant::now();
+    let result = sim.run_for(3.0);
+    let wall = start.elapsed().as_secs_f64();
+    let z = tip.iter().map(|&i| sim.positions()[i].z).sum::<f64>() / tip.len() as f64;
+    let deflection = 0.01 - z;
+    let span = 0.2 - s;
+    let analytic = 0.01 * span.powi(3) / (3.0 * 1.0e6 * 0.02_f64.powi(4) / 12.0);
+    StudyPoint {
+        case: "cantilever",
+        resolution: r,
+        dt_fraction,
+        steps: sim.steps(),
+        wall,
+        value: deflection,
+        error: if result.is_ok() {
+            (deflection / analytic - 1.0).abs()
+        } else {
+            f64::NAN
+        },
+    }
+}
+
+/// Locomotion of one robot (seed 7) at `r` voxels across the 20 mm workspace, 3 cycles.
+fn locomotion_run(r: usize, dt_fraction: f64) -> StudyPoint {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let genome = random_genome(&mut rng, 88, &GenomeLimits::default(), 2);
+    let grid = voxelize(&genome, GridDims::new(r, r, r), 2, DEFAULT_THRESHOLD);
+    let scene = DynamicScene {
+        voxel_size: 0.02 / r as f64,
+        dt_fraction,
+        actuation_cycles: 3,
+        settle: amorph::dynamics::SettleRule {
+            max_time: 0.1,
+            still_speed: 0.0,
+            check_interval: 0.01,
+        },
+        ..DynamicScene::paper_locomotion()
+    };
+    let start = Instant::now();
+    let outcome = simulate_locomotion(&grid, &foam_palette(), &scene);
+    let wall = start.elapsed().as_secs_f64();
+    StudyPoint {
+        case: "locomotion",
+        resolution: r,
+        dt_fraction,
+        steps: outcome.steps,
+        wall,
+        value: outcome.completed_fitness().unwrap_or(f64::NAN),
+        error: f64::NAN,
+    }
+}
+
+fn study() {
+    let dir = std::path::PathBuf::from(
+        std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| "target".into()),
+    )
+    .join("dynamics-study");
+    std::fs::create_dir_all(&dir).unwrap();
+    let fractions = [0.25, 0.5, 1.0, 2.0];
+    let mut points = Vec::new();
+    for r in [1, 2] {
+        for &f in &fractions {
+            let p = cantilever_run(r, f);
+            println!(
+                "cantilever r={r} f={f}: error {:.3e}, {:.2} s",
+                p.error, p.wall
+            );
+            points.push(p);
+        }
+    }
+    let mut loco = Vec::new();
+    for r in [10, 20] {
+        for &f in &fractions {
+            let p = locomotion_run(r, f);
+            println!(
+                "locomotion r={r} f={f}: Δx {:.4e} m, {:.2} s",
+                p.value, p.wall
+            );
+            loco.push(p);
+        }
+    }
+    // Error against the finest run (highest resolution, smallest step).
+    let finest = loco
+        .iter()
+        .filter(|p| p.resolution == 20)
+        .min_by(|a, b| a.dt_fraction.total_cmp(&b.dt_fraction))
+        .map(|p| p.value)
+        .unwrap();
+    for p in &mut loco {
+        p.error = (p.value - finest).abs() / finest.abs();
+    }
+    points.extend(loco);
+    let mut csv = String::from("case,resolution,dt_fraction,steps,wall_s,value,relative_error\n");
+    for p in &points {
+        csv.push_str(&format!(
+            "{},{},{},{},{:.4},{:.6e},{:.4e}\n",
+            p.case, p.resolution, p.dt_fraction, p.steps, p.wall, p.value, p.error
+        ));
+    }
+    std::fs::write(dir.join("error_vs_time.csv"), csv).unwrap();
+    std::fs::write(dir.join("error_vs_time.svg"), svg_plot(&points)).unwrap();
+    println!("wrote {}", dir.display());
+}
+
+/// A log–log scatter of relative error against wall time, one colour per case and resolution,
+/// hand-written SVG (no plotting dependency; convert to PNG with any SVG tool).
+fn svg_plot(points: &[StudyPoint]) -> String {
+    let (w, h, m) = (640.0, 440.0, 60.0);
+    let usable: Vec<&StudyPoint> = points
+        .iter()
+        .filter(|p| p.error.is_finite() && p.error > 0.0 && p.wall > 0.0)
+        .collect();
+    let lx = |t: f64| t.log10();
+    let (tmin, tmax) = usable
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(lx(p.wall)), b.max(lx(p.wall)))
+        });
+    let (emin, emax) = usable
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(lx(p.error)), b.max(lx(p.error)))
+        });
+    let (tmin, tmax) = (tmin.floor(), tmax.ceil().max(tmin.floor() + 1.0));
+    let (emin, emax) = (emin.floor(), emax.ceil().max(emin.floor() + 1.0));
+    let px = |t: f64| m + (lx(t) - tmin) / (tmax - tmin) * (w - 2.0 * m);
+    let py = |e: f64| h - m - (lx(e) - emin) / (emax - emin) * (h - 2.0 * m);
+    let mut svg = format!(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}'>\
+         <rect width='100%' height='100%' fill='white'/>\
+         <line x1='{m}' y1='{}' x2='{}' y2='{}' stroke='black'/>\
+         <line x1='{m}' y1='{m}' x2='{m}' y2='{}' stroke='black'/>",
+        h - m,
+        w - m,
+        h - m,
+        h - m
+    );
+    for d in tmin as i32..=tmax as i32 {
+        let x = px(10f64.powi(d));
+        svg.push_str(&format!(
+            "<text x='{x}' y='{}' font-size='12' text-anchor='middle'>1e{d} s</text>",
+            h - m + 18.0
+        ));
+    }
+    for d in emin as i32..=emax as i32 {
+        let y = py(10f64.powi(d));
+        svg.push_str(&format!(
+            "<text x='{}' y='{y}' font-size='12' text-anchor='end'>1e{d}</text>\
+             <line x1='{m}' y1='{y}' x2='{}' y2='{y}' stroke='#ddd'/>",
+            m - 4.0,
+            w - m
+        ));
+    }
+    let colours = [
+        ("cantilever", 1, "#1f77b4"),
+        ("cantilever", 2, "#17becf"),
+        ("locomotion", 10, "#d62728"),
+        ("locomotion", 20, "#ff7f0e"),
+    ];
+    for (k, (case, r, colour)) in colours.iter().enumerate() {
+        let series: Vec<&&StudyPoint> = usable
+            .iter()
+            .filter(|p| p.case == *case && p.resolution == *r)
+            .collect();
+        let path: Vec<String> = series
+            .iter()
+            .map(|p| format!("{:.1},{:.1}", px(p.wall), py(p.error)))
+            .collect();
+        if path.len() > 1 {
+            svg.push_str(&format!(
+                "<polyline points='{}' fill='none' stroke='{colour}'/>",
+                path.join(" ")
+            ));
+        }
+        for p in &series {
+            svg.push_str(&format!(
+                "<circle cx='{:.1}' cy='{:.1}' r='4' fill='{colour}'><title>f={}</title></circle>",
+                px(p.wall),
+                py(p.error),
+                p.dt_fraction
+            ));
+        }
+        svg.push_str(&format!(
+            "<text x='{}' y='{}' font-size='12' fill='{colour}'>{case} r={r}</text>",
+            w - m - 150.0,
+            m + 16.0 * k as f64
+        ));
+    }
+    svg.push_str(&format!(
+        "<text x='{}' y='{}' font-size='13' text-anchor='middle'>wall time (s)</text>\
+         <text x='14' y='{}' font-size='13' transform='rotate(-90 14 {})' text-anchor='middle'>relative error</text></svg>",
+        w / 2.0,
+        h - 12.0,
+        h / 2.0,
+        h / 2.0
+    ));
+    svg
+}

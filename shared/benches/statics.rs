@@ -1,0 +1,110 @@
+//! Static solver benchmarks, single thread. Sizes are in the names; two-material designs are full
+//! boxes whose hard/soft (1000:1) pattern is a seeded random Gaussian-mixture genome.
+//!
+//! `cargo bench -p amorph --bench statics -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+
+use amorph::genome::{GenomeLimits, random_genome};
+use amorph::material::{MaterialId, Palette};
+use amorph::statics::{StaticLoadCase, StaticModel, StaticSolverParams, solve};
+use amorph::voxel::{GridDims, VoxelGrid, voxelize};
+use criterion::{Criterion, criterion_group, criterion_main};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+const BEAM_LENGTH: f64 = 0.04;
+
+fn homogeneous(dims: GridDims) -> VoxelGrid {
+    VoxelGrid::filled(dims, MaterialId(0))
+}
+
+/// Every cell filled, the material chosen by a seeded random genome of 24 points.
+fn two_material(dims: GridDims, seed: u64) -> VoxelGrid {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let genome = random_genome(&mut rng, 24, &GenomeLimits::default(), 2);
+    voxelize(&genome, dims, 2, f64::NEG_INFINITY)
+}
+
+fn cantilever(model: &StaticModel) -> StaticLoadCase {
+    let ny = model.dims().ny;
+    let layer = |y: usize| (0..model.node_count()).filter(move |&n| model.node_coords(n)[1] == y);
+    let tip: Vec<usize> = layer(ny - 1).collect();
+    let f = -0.01 / tip.len() as f64;
+    StaticLoadCase {
+        fixed_nodes: layer(0).collect(),
+        loads: tip
+            .iter()
+            .map(|&n| (n, [0.0, 0.0, f, 0.0, 0.0, 0.0]))
+            .collect(),
+    }
+}
+
+fn bench_case(
+    c: &mut Criterion,
+    name: &str,
+    grid: &VoxelGrid,
+    methods: &[(&str, StaticSolverParams)],
+) {
+    let dims = grid.dims();
+    let palette = Palette::hard_soft_resins();
+    let model = StaticModel::new(grid, &palette, BEAM_LENGTH / dims.ny as f64).unwrap();
+    let case = cantilever(&model);
+    for (method, params) in methods {
+        let start = std::time::Instant::now();
+        let solution = solve(&model, &case, params).unwrap();
+        eprintln!(
+            "{name}_{method}: first solve {:.3} s, {:?}",
+            start.elapsed().as_secs_f64(),
+            solution.diagnostics
+        );
+        c.bench_function(&format!("{name}_{method}"), |b| {
+            b.iter(|| solve(black_box(&model), black_box(&case), params).unwrap())
+        });
+    }
+}
+
+fn statics(c: &mut Criterion) {
+    let direct = ("direct", StaticSolverParams::direct());
+    let multigrid = ("multigrid", StaticSolverParams::multigrid_pcg());
+    let jacobi = ("block_jacobi", StaticSolverParams::block_jacobi_pcg());
+
+    let grid = two_material(GridDims::new(12, 40, 12), 7);
+    c.bench_function("static_model_build_12x12x40", |b| {
+        b.iter(|| StaticModel::new(black_box(&grid), &Palette::hard_soft_resins(), 1e-3).unwrap())
+    });
+
+    bench_case(
+        c,
+        "static_solve_6x6x20",
+        &two_material(GridDims::new(6, 20, 6), 7),
+        &[direct.clone(), multigrid.clone(), jacobi.clone()],
+    );
+    bench_case(
+        c,
+        "static_solve_12x12x40_homogeneous",
+        &homogeneous(GridDims::new(12, 40, 12)),
+        &[direct.clone(), multigrid.clone()],
+    );
+    bench_case(
+        c,
+        "static_solve_12x12x40_two_material",
+        &two_material(GridDims::new(12, 40, 12), 7),
+        &[direct.clone(), multigrid.clone(), jacobi],
+    );
+    if std::env::var_os("AMORPH_BENCH_LARGE").is_some() {
+        bench_case(
+            c,
+            "static_solve_24x80x24_two_material",
+            &two_material(GridDims::new(24, 80, 24), 7),
+            &[multigrid],
+        );
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(10);
+    targets = statics
+}
+criterion_main!(benches);

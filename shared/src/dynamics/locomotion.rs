@@ -1,0 +1,151 @@
+//! The locomotion task (paper §IV): keep the largest body, settle it on the floor under gravity,
+//! record the centre of mass, actuate for a number of cycles, and score the centre of mass's
+//! displacement along +X.
+
+use serde::{Deserialize, Serialize};
+
+use super::math::Vec3;
+use super::scene::DynamicScene;
+use super::simulation::{DivergenceReason, Simulation};
+use crate::material::Palette;
+use crate::voxel::{VoxelGrid, keep_largest_component};
+
+/// How a locomotion evaluation ended.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum LocomotionStatus {
+    /// Settled and actuated for every cycle; the fitness is meaningful.
+    Completed,
+    /// Stopped at `time` (s) for `reason`; the fitness is 0.
+    Diverged { reason: DivergenceReason, time: f64 },
+    /// The design has no voxels.
+    Empty,
+    /// The scene or palette is invalid (the message names the field).
+    Invalid { message: String },
+}
+
+/// The result of [`simulate_locomotion`]. Every number is finite.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LocomotionOutcome {
+    pub status: LocomotionStatus,
+    /// Displacement of the centre of mass along +X from the end of settling to the end of the
+    /// last actuation cycle, m (0 unless completed).
+    pub fitness: f64,
+    /// fitness / body length / cycles, in % of body length per cycle (paper's Table IV measure).
+    pub speed_percent_per_cycle: f64,
+    /// Extent of the body along X at rest, m.
+    pub body_length: f64,
+    pub voxel_count: usize,
+    pub steps: u64,
+    /// Simulated time, s (settling plus actuation).
+    pub simulated_time: f64,
+    /// How long settling took, s.
+    pub settle_time: f64,
+    /// Time step used, s.
+    pub dt: f64,
+    /// Centre of mass at the end of settling and after each actuation cycle, m.
+    pub centre_of_mass_trace: Vec<[f64; 3]>,
+}
+
+impl LocomotionOutcome {
+    fn failed(status: LocomotionStatus, voxel_count: usize) -> Self {
+        Self {
+            status,
+            fitness: 0.0,
+            speed_percent_per_cycle: 0.0,
+            body_length: 0.0,
+            voxel_count,
+            steps: 0,
+            simulated_time: 0.0,
+            settle_time: 0.0,
+            dt: 0.0,
+            centre_of_mass_trace: Vec::new(),
+        }
+    }
+
+    /// The fitness if the evaluation completed.
+    pub fn completed_fitness(&self) -> Option<f64> {
+        (self.status == LocomotionStatus::Completed).then_some(self.fitness)
+    }
+}
+
+/// Evaluates a design for forward locomotion. Deterministic bit for bit; never panics on a
+/// design (degenerate inputs become a status).
+pub fn simulate_locomotion(
+    grid: &VoxelGrid,
+    palette: &Palette,
+    scene: &DynamicScene,
+) -> LocomotionOutcome {
+    let body = keep_largest_component(grid);
+    let voxel_count = body.filled_count();
+    if voxel_count == 0 {
+        return LocomotionOutcome::failed(LocomotionStatus::Empty, 0);
+    }
+    let mut sim = match Simulation::new(&body, palette, scene) {
+        Ok(sim) => sim,
+        Err(e) => {
+            return LocomotionOutcome::failed(
+                LocomotionStatus::Invalid {
+                    message: e.to_string(),
+                },
+                voxel_count,
+            );
+        }
+    };
+    let (min_x, max_x) = sim
+        .cells()
+        .iter()
+        .fold((u16::MAX, 0), |(lo, hi), c| (lo.min(c[0]), hi.max(c[0])));
+    let body_length = f64::from(max_x - min_x + 1) * scene.voxel_size;
+    let mut outcome = LocomotionOutcome {
+        body_length,
+        dt: sim.dt(),
+        ..LocomotionOutcome::failed(LocomotionStatus::Completed, voxel_count)
+    };
+    let result = run(&mut sim, scene, &mut outcome);
+    outcome.steps = sim.steps();
+    outcome.simulated_time = sim.time();
+    if let Err(d) = result {
+        outcome.status = LocomotionStatus::Diverged {
+            reason: d.reason,
+            time: d.time,
+        };
+        outcome.fitness = 0.0;
+        outcome.speed_percent_per_cycle = 0.0;
+    }
+    outcome
+}
+
+fn run(
+    sim: &mut Simulation,
+    scene: &DynamicScene,
+    outcome: &mut LocomotionOutcome,
+) -> Result<(), super::simulation::Divergence> {
+    let rule = &scene.settle;
+    while sim.time() < rule.max_time {
+        let chunk = rule.check_interval.min(rule.max_time - sim.time());
+        sim.run_for(chunk)?;
+        if rule.still_speed > 0.0 && sim.max_speed() < rule.still_speed {
+            break;
+        }
+    }
+    outcome.settle_time = sim.time();
+    let start = sim.centre_of_mass();
+    let to_array = |c: Vec3| [c.x, c.y, c.z];
+    outcome.centre_of_mass_trace.push(to_array(start));
+    if let Some(actuation) = &scene.actuation {
+        sim.start_actuation();
+        let steps_per_cycle = (actuation.period / sim.dt()).round().max(1.0) as u64;
+        for _ in 0..scene.actuation_cycles {
+            sim.run_steps(steps_per_cycle)?;
+            outcome
+                .centre_of_mass_trace
+                .push(to_array(sim.centre_of_mass()));
+        }
+    }
+    let end = sim.centre_of_mass();
+    outcome.fitness = end.x - start.x;
+    let cycles = f64::from(scene.actuation_cycles.max(1));
+    outcome.speed_percent_per_cycle = 100.0 * outcome.fitness / outcome.body_length / cycles;
+    Ok(())
+}

@@ -1,0 +1,28 @@
+//! Dynamic analysis: the voxel soft-body simulator (paper §II-B) and the locomotion task (§IV).
+//!
+//! Voxels carry position, orientation, momentum and angular momentum in flat arrays; links between
+//! face-adjacent voxels are co-rotational 3-D Euler–Bernoulli frame elements; semi-implicit Euler
+//! advances the state with an automatic time step. The scene ([`DynamicScene`]) decides which
+//! passes the step loop has (links, gravity, floor with Coulomb friction, self-collision,
+//! actuation, each damping kind); a disabled pass is absent from the loop.
+//!
+//! Divergence is an outcome ([`Divergence`]), never a panic, and the simulation is single-threaded
+//! and bit-reproducible.
+
+mod collide;
+mod error;
+mod link;
+mod locomotion;
+mod math;
+mod passes;
+mod scene;
+mod simulation;
+mod state;
+
+pub use error::{DynamicsError, Result};
+pub use locomotion::{LocomotionOutcome, LocomotionStatus, simulate_locomotion};
+pub use math::{Mat3, Quat, Vec3};
+pub use scene::{
+    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, SettleRule, foam_palette,
+};
+pub use simulation::{Divergence, DivergenceReason, Energy, Pass, Simulation};

@@ -1,0 +1,276 @@
+//! The dynamic scene: every physical and numerical parameter of a simulation, with units,
+//! defaults and trade-offs, validated once. The scene decides which passes the step loop has.
+
+use serde::{Deserialize, Serialize};
+
+use super::error::{DynamicsError, Result};
+use crate::material::{Material, Palette};
+
+/// Everything a dynamic simulation needs besides the voxels and their materials.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DynamicScene {
+    /// Edge length s of a voxel, m. Default 1e-3 (a 20-voxel robot is ~18–20 mm, as in the
+    /// paper's Table IV). Smaller voxels make the time step shorter (dt ∝ s for fixed E, ρ).
+    pub voxel_size: f64,
+    /// Gravitational acceleration along −Z, m/s². Default 9.81; 0 removes the gravity pass.
+    pub gravity: f64,
+    /// The floor at z = 0, or none (free space).
+    pub floor: Option<Floor>,
+    /// Self-collision between non-adjacent surface voxels. Default false (costs a spatial-hash
+    /// rebuild per step).
+    pub collisions: bool,
+    /// Volumetric actuation of the palette's actuated materials, or none.
+    pub actuation: Option<Actuation>,
+    /// Damping of every kind, as ratios of critical damping.
+    pub damping: DampingParams,
+    /// Time-step fraction f in dt = f / (2π √(k_max / m_min)), dimensionless. Default 1.0.
+    /// The symplectic Euler scheme is stable up to f ≈ 2.5 on a dense block (see the stability
+    /// suite); smaller f buys accuracy with proportionally more steps.
+    pub dt_fraction: f64,
+    /// How the body settles under gravity before actuation starts (locomotion only).
+    pub settle: SettleRule,
+    /// Number of actuation cycles after settling (locomotion only). Default 10 (the paper's).
+    pub actuation_cycles: u32,
+    /// When a run counts as diverged.
+    pub divergence: DivergenceLimits,
+}
+
+impl Default for DynamicScene {
+    fn default() -> Self {
+        Self {
+            voxel_size: 1e-3,
+            gravity: 9.81,
+            floor: Some(Floor::default()),
+            collisions: false,
+            actuation: None,
+            damping: DampingParams::default(),
+            dt_fraction: 1.0,
+            settle: SettleRule::default(),
+            actuation_cycles: 10,
+            divergence: DivergenceLimits::default(),
+        }
+    }
+}
+
+/// A rigid, flat floor at z = 0 with penalty contact and Coulomb friction (coefficients come from
+/// the voxel's material).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Floor {
+    /// Contact stiffness as a multiple of the voxel's own axial link stiffness E·s, dimensionless.
+    /// Default 1.0: penetration under a voxel's weight is then ~ρ g s²/E (negligible) and the
+    /// stable time step is unchanged. Larger values stiffen contact and shorten the stable step.
+    pub stiffness_factor: f64,
+    /// Incline of the floor, rad: the floor stays at z = 0 and gravity is tilted by this angle
+    /// about +Y, so "downhill" is +X. Default 0.
+    pub incline: f64,
+}
+
+impl Default for Floor {
+    fn default() -> Self {
+        Self {
+            stiffness_factor: 1.0,
+            incline: 0.0,
+        }
+    }
+}
+
+/// Sinusoidal volumetric actuation: an actuated voxel's volume follows
+/// 1 + amplitude_volume · sin(2π t / period + phase), so its links' rest lengths scale by the cube
+/// root of that (per axis).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Actuation {
+    /// Relative volume amplitude, dimensionless: 0.2 = ±20 % (the paper's; (1 + a)³ = 1.2 with a
+    /// the linear amplitude). Must be in [0, 1).
+    pub amplitude_volume: f64,
+    /// Period T of one actuation cycle, s. Default 0.07 (the paper's Table IV), slow compared
+    /// with the resonance of an 18 mm foam body (~3 ms).
+    pub period: f64,
+    /// Phase at t = 0 of the actuation clock, rad. Default 0.
+    pub phase: f64,
+}
+
+impl Default for Actuation {
+    fn default() -> Self {
+        Self {
+            amplitude_volume: 0.2,
+            period: 0.07,
+            phase: 0.0,
+        }
+    }
+}
+
+/// Damping as ratios of critical damping ζ (0 = none, 1 = critical). A zero ratio removes the
+/// corresponding pass (or the damping terms of the link pass) from the step loop.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DampingParams {
+    /// Relative-velocity damping of every link (translation without the rigid rotation, and
+    /// relative spin), ζ with c = 2ζ√(m k) per link. Default 1.0 (as Voxelyze's usual setting):
+    /// kills internal ringing within a few periods without touching rigid motion. Large values
+    /// shrink the stable step (explicit damping).
+    pub link: f64,
+    /// Damping of each voxel's absolute velocity against the world, ζ. Default 0: it drags the
+    /// whole body and so biases locomotion; useful to settle static scenes quickly.
+    pub global: f64,
+    /// Damping of the normal velocity of a voxel in floor contact, ζ. Default 1.0: no bouncing.
+    pub contact: f64,
+}
+
+impl Default for DampingParams {
+    fn default() -> Self {
+        Self {
+            link: 1.0,
+            global: 0.0,
+            contact: 1.0,
+        }
+    }
+}
+
+/// When settling under gravity ends: when every voxel is slower than `still_speed`, checked every
+/// `check_interval` seconds, or at `max_time`, whichever comes first.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SettleRule {
+    /// Longest settling time, s. Default 0.5 (the reference evaluation's).
+    pub max_time: f64,
+    /// Speed under which the body counts as still, m/s. Default 1e-3 (one voxel per second at
+    /// 1 mm voxels). 0 means always settle for `max_time`.
+    pub still_speed: f64,
+    /// How often stillness is checked, s. Default 0.01.
+    pub check_interval: f64,
+}
+
+impl Default for SettleRule {
+    fn default() -> Self {
+        Self {
+            max_time: 0.5,
+            still_speed: 1e-3,
+            check_interval: 0.01,
+        }
+    }
+}
+
+/// Limits past which a simulation is declared diverged (checked every step).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DivergenceLimits {
+    /// Largest axial link strain |ΔL/L|, dimensionless. Default 1.0: a link stretched to twice
+    /// or crushed to nothing is no longer a beam.
+    pub max_strain: f64,
+    /// Largest distance a voxel may travel in one step, in voxel sizes. Default 0.25: an explicit
+    /// step cannot resolve contact or links beyond that, so it signals a runaway (kinetic energy).
+    pub max_step_travel: f64,
+}
+
+impl Default for DivergenceLimits {
+    fn default() -> Self {
+        Self {
+            max_strain: 1.0,
+            max_step_travel: 0.25,
+        }
+    }
+}
+
+impl DynamicScene {
+    /// The paper's locomotion setup (§IV): floor with gravity, ±20 % volume actuation at a
+    /// 0.07 s period, 10 cycles after settling. Use it with [`foam_palette`].
+    pub fn paper_locomotion() -> Self {
+        Self {
+            actuation: Some(Actuation::default()),
+            ..Self::default()
+        }
+    }
+
+    /// Free space, no gravity, no floor, no damping: only the link pass remains.
+    pub fn free_space(voxel_size: f64) -> Self {
+        Self {
+            voxel_size,
+            gravity: 0.0,
+            floor: None,
+            damping: DampingParams {
+                link: 0.0,
+                global: 0.0,
+                contact: 0.0,
+            },
+            ..Self::default()
+        }
+    }
+
+    /// Checks every field, naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        let check = |field: &'static str, value: f64, ok: bool| {
+            if value.is_finite() && ok {
+                Ok(())
+            } else {
+                Err(DynamicsError::InvalidScene { field, value })
+            }
+        };
+        check("voxel_size", self.voxel_size, self.voxel_size > 0.0)?;
+        check("gravity", self.gravity, self.gravity >= 0.0)?;
+        if let Some(f) = &self.floor {
+            check(
+                "floor.stiffness_factor",
+                f.stiffness_factor,
+                f.stiffness_factor > 0.0,
+            )?;
+            check(
+                "floor.incline",
+                f.incline,
+                f.incline.abs() < std::f64::consts::FRAC_PI_2,
+            )?;
+        }
+        if let Some(a) = &self.actuation {
+            check(
+                "actuation.amplitude_volume",
+                a.amplitude_volume,
+                (0.0..1.0).contains(&a.amplitude_volume),
+            )?;
+            check("actuation.period", a.period, a.period > 0.0)?;
+            check("actuation.phase", a.phase, true)?;
+        }
+        let d = &self.damping;
+        check("damping.link", d.link, d.link >= 0.0)?;
+        check("damping.global", d.global, d.global >= 0.0)?;
+        check("damping.contact", d.contact, d.contact >= 0.0)?;
+        check("dt_fraction", self.dt_fraction, self.dt_fraction > 0.0)?;
+        let s = &self.settle;
+        check("settle.max_time", s.max_time, s.max_time >= 0.0)?;
+        check("settle.still_speed", s.still_speed, s.still_speed >= 0.0)?;
+        check(
+            "settle.check_interval",
+            s.check_interval,
+            s.check_interval > 0.0,
+        )?;
+        let v = &self.divergence;
+        check("divergence.max_strain", v.max_strain, v.max_strain > 0.0)?;
+        check(
+            "divergence.max_step_travel",
+            v.max_step_travel,
+            v.max_step_travel > 0.0,
+        )?;
+        Ok(())
+    }
+}
+
+/// The locomotion palette: a passive and an actuated silicone foam (paper §IV: open- and
+/// closed-cell foam rubber), E = 300 kPa, ν = 0.35, ρ = 500 kg/m³ (a 3,500-voxel robot of 1 mm
+/// voxels then weighs ~1.7 g, the paper's Table IV weight read in kg), static friction 1.0,
+/// kinetic 0.3 (the paper's values).
+pub fn foam_palette() -> Palette {
+    let foam = |name: &str, actuated: bool, colour: [u8; 3]| {
+        let mut m = Material::new(name, 3.0e5, 0.35);
+        m.density = 500.0;
+        m.static_friction = 1.0;
+        m.kinetic_friction = 0.3;
+        m.actuated = actuated;
+        m.colour = colour;
+        m
+    };
+    Palette(vec![
+        foam("passive foam", false, [240, 240, 240]),
+        foam("actuated foam", true, [240, 140, 40]),
+    ])
+}

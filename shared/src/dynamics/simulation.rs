@@ -1,0 +1,484 @@
+//! The simulation: state arrays, the step loop built from the scene's passes, and observables
+//! (centre of mass, momenta, energy) for tasks, tests and studies.
+
+use std::f64::consts::PI;
+
+use serde::{Deserialize, Serialize};
+
+use super::collide::Collisions;
+use super::error::{DynamicsError, Result};
+use super::link::{LinkStep, link_energy, link_pass};
+use super::math::Vec3;
+use super::passes::{
+    FloorContact, external_force_pass, floor_pass, global_damping_pass, gravity_pass,
+    integrate_pass,
+};
+use super::scene::DynamicScene;
+use super::state::{Links, Voxels, build_state};
+use crate::material::Palette;
+use crate::voxel::VoxelGrid;
+
+/// Why a simulation stopped before its end.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum DivergenceReason {
+    #[error("non-finite state")]
+    NonFinite,
+    #[error("link strain {strain:.3} above the limit {limit}")]
+    Strain { strain: f64, limit: f64 },
+    #[error("a voxel moved {travel:.3} voxel sizes in one step, above the limit {limit}")]
+    Runaway { travel: f64, limit: f64 },
+}
+
+/// A diverged simulation: the reason, the simulated time and the step at which it was detected.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
+#[error("diverged at t = {time} s (step {step}): {reason}")]
+pub struct Divergence {
+    pub reason: DivergenceReason,
+    pub time: f64,
+    pub step: u64,
+}
+
+/// One pass of the step loop. The list is chosen once from the scene: a disabled pass is absent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    Links { damped: bool, actuated: bool },
+    ExternalForces,
+    Gravity,
+    GlobalDamping,
+    Collisions,
+    Floor,
+    Integrate,
+}
+
+/// Energy split (J). Gravity's and the external loads' potential is −f·x (in `gravitational`),
+/// so only differences are meaningful.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Energy {
+    pub kinetic: f64,
+    pub elastic: f64,
+    pub gravitational: f64,
+    pub contact: f64,
+}
+
+impl Energy {
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.elastic + self.gravitational + self.contact
+    }
+}
+
+/// A running dynamic simulation of one voxel body.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    scene: DynamicScene,
+    voxels: Voxels,
+    links: Links,
+    passes: Vec<Pass>,
+    external: Vec<Vec3>,
+    global_damping: (Vec<f64>, Vec<f64>),
+    floor: FloorContact,
+    collisions: Collisions,
+    gravity: Vec3,
+    dt: f64,
+    time: f64,
+    steps: u64,
+    actuation_time: Option<f64>,
+}
+
+impl Simulation {
+    /// Builds the simulation of a voxel design. With a floor, the body is lowered so that its
+    /// lowest voxels just touch it.
+    pub fn new(grid: &VoxelGrid, palette: &Palette, scene: &DynamicScene) -> Result<Self> {
+        scene.validate()?;
+        let s = scene.voxel_size;
+        let (mut voxels, links) = build_state(grid, palette, s, scene.damping.link)?;
+        let n = voxels.len();
+        if scene.floor.is_some() {
+            let lowest = voxels
+                .position
+                .iter()
+                .map(|p| p.z)
+                .fold(f64::INFINITY, f64::min);
+            for p in &mut voxels.position {
+                p.z -= lowest - 0.5 * s;
+            }
+        }
+        let incline = scene.floor.as_ref().map_or(0.0, |f| f.incline);
+        let gravity = Vec3::new(
+            scene.gravity * incline.sin(),
+            0.0,
+            -scene.gravity * incline.cos(),
+        );
+        let mut floor = FloorContact::default();
+        if let Some(f) = &scene.floor {
+            floor.stiffness = voxels
+                .stiffness
+                .iter()
+                .map(|k| k * f.stiffness_factor)
+                .collect();
+            floor.damping = (0..n)
+                .map(|i| 2.0 * scene.damping.contact * (voxels.mass[i] * floor.stiffness[i]).sqrt())
+                .collect();
+            floor.sticking = vec![false; n];
+        }
+        let zeta = scene.damping.global;
+        let global_damping = if zeta > 0.0 {
+            (0..n)
+                .map(|i| {
+                    let (m, k) = (voxels.mass[i], voxels.stiffness[i]);
+                    (
+                        2.0 * zeta * (m * k).sqrt(),
+                        2.0 * zeta * (m * s * s / 6.0 * k * s * s / 12.0).sqrt(),
+                    )
+                })
+                .unzip()
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let k_max = links
+            .axial
+            .iter()
+            .copied()
+            .chain(floor.stiffness.iter().copied())
+            .chain(voxels.stiffness.iter().copied())
+            .fold(0.0, f64::max);
+        let m_min = voxels.mass.iter().copied().fold(f64::INFINITY, f64::min);
+        let dt = scene.dt_fraction / (2.0 * PI * (k_max / m_min).sqrt());
+        let collisions = if scene.collisions {
+            Collisions::new(&voxels, s)
+        } else {
+            Collisions::default()
+        };
+        let mut sim = Self {
+            scene: scene.clone(),
+            voxels,
+            links,
+            passes: Vec::new(),
+            external: Vec::new(),
+            global_damping,
+            floor,
+            collisions,
+            gravity,
+            dt,
+            time: 0.0,
+            steps: 0,
+            actuation_time: None,
+        };
+        sim.rebuild_passes();
+        Ok(sim)
+    }
+
+    fn rebuild_passes(&mut self) {
+        let sc = &self.scene;
+        let mut passes = Vec::new();
+        if !self.links.is_empty() {
+            passes.push(Pass::Links {
+                damped: sc.damping.link > 0.0,
+                actuated: sc.actuation.is_some()
+                    && self.actuation_time.is_some()
+                    && self.voxels.actuated.iter().any(|&a| a),
+            });
+        }
+        if !self.external.is_empty() {
+            passes.push(Pass::ExternalForces);
+        }
+        if self.gravity != Vec3::ZERO {
+            passes.push(Pass::Gravity);
+        }
+        if !self.global_damping.0.is_empty() {
+            passes.push(Pass::GlobalDamping);
+        }
+        if sc.collisions {
+            passes.push(Pass::Collisions);
+        }
+        if sc.floor.is_some() {
+            passes.push(Pass::Floor);
+        }
+        passes.push(Pass::Integrate);
+        self.passes = passes;
+    }
+
+    /// The passes of the step loop, in order.
+    pub fn passes(&self) -> &[Pass] {
+        &self.passes
+    }
+
+    /// Runs only the given passes (for the per-pass benchmark); must end with `Integrate`.
+    pub fn set_passes(&mut self, passes: Vec<Pass>) {
+        self.passes = passes;
+    }
+
+    /// Starts the actuation clock now: actuated links follow the scene's sinusoid from here on.
+    /// Without an actuation in the scene this does nothing.
+    pub fn start_actuation(&mut self) {
+        if self.scene.actuation.is_some() {
+            self.actuation_time = Some(self.time);
+            self.rebuild_passes();
+        }
+    }
+
+    /// Holds voxel `i` in place (position and orientation), like a clamp.
+    pub fn fix_voxel(&mut self, i: usize) -> Result<()> {
+        self.check_index(i)?;
+        self.voxels.inv_mass[i] = 0.0;
+        self.voxels.inv_inertia[i] = 0.0;
+        Ok(())
+    }
+
+    /// Applies a constant external force (N) to voxel `i`, in addition to any other.
+    pub fn add_external_force(&mut self, i: usize, force: Vec3) -> Result<()> {
+        self.check_index(i)?;
+        if self.external.is_empty() {
+            self.external = vec![Vec3::ZERO; self.voxels.len()];
+        }
+        self.external[i] += force;
+        self.rebuild_passes();
+        Ok(())
+    }
+
+    /// Sets the velocity of every voxel to `v + ω × (x − centre)` and its spin to ω: a rigid motion.
+    pub fn set_rigid_velocity(&mut self, v: Vec3, omega: Vec3, centre: Vec3) {
+        let vx = &mut self.voxels;
+        for i in 0..vx.len() {
+            let vel = v + omega.cross(vx.position[i] - centre);
+            vx.velocity[i] = vel;
+            vx.momentum[i] = vel * vx.mass[i];
+            vx.angular_velocity[i] = omega;
+            vx.angular_momentum[i] = omega * (vx.mass[i] * self.scene.voxel_size.powi(2) / 6.0);
+        }
+    }
+
+    /// Sets the velocity (m/s) of voxel `i`.
+    pub fn set_velocity(&mut self, i: usize, velocity: Vec3) -> Result<()> {
+        self.check_index(i)?;
+        self.voxels.velocity[i] = velocity;
+        self.voxels.momentum[i] = velocity * self.voxels.mass[i];
+        Ok(())
+    }
+
+    /// Index of the voxel in grid cell (x, y, z), if filled.
+    pub fn voxel_at(&self, cell: [usize; 3]) -> Option<usize> {
+        self.voxels
+            .cell
+            .iter()
+            .position(|c| [usize::from(c[0]), usize::from(c[1]), usize::from(c[2])] == cell)
+    }
+
+    fn check_index(&self, i: usize) -> Result<()> {
+        if i < self.voxels.len() {
+            Ok(())
+        } else {
+            Err(DynamicsError::VoxelIndex {
+                index: i,
+                count: self.voxels.len(),
+            })
+        }
+    }
+
+    /// Linear rest-length factor λ of actuated material now: the cube root of the volume factor.
+    pub fn actuation_factor(&self) -> f64 {
+        match (&self.scene.actuation, self.actuation_time) {
+            (Some(a), Some(t0)) => {
+                let phase = 2.0 * PI * (self.time - t0) / a.period + a.phase;
+                (1.0 + a.amplitude_volume * phase.sin()).cbrt()
+            }
+            _ => 1.0,
+        }
+    }
+
+    /// Advances one time step. On divergence the state is left as it was found diverged and
+    /// every further call returns the same outcome.
+    pub fn step(&mut self) -> std::result::Result<(), Divergence> {
+        let link_step = LinkStep {
+            voxel_size: self.scene.voxel_size,
+            actuation_factor: self.actuation_factor(),
+        };
+        let mut max_strain = 0.0;
+        let mut summary = None;
+        for k in 0..self.passes.len() {
+            match self.passes[k] {
+                Pass::Links { damped, actuated } => {
+                    let (l, v) = (&self.links, &mut self.voxels);
+                    max_strain = match (damped, actuated) {
+                        (false, false) => link_pass::<false, false>(l, v, link_step),
+                        (true, false) => link_pass::<true, false>(l, v, link_step),
+                        (false, true) => link_pass::<false, true>(l, v, link_step),
+                        (true, true) => link_pass::<true, true>(l, v, link_step),
+                    };
+                }
+                Pass::ExternalForces => external_force_pass(&mut self.voxels, &self.external),
+                Pass::Gravity => gravity_pass(&mut self.voxels, self.gravity),
+                Pass::GlobalDamping => global_damping_pass(
+                    &mut self.voxels,
+                    &self.global_damping.0,
+                    &self.global_damping.1,
+                ),
+                Pass::Collisions => self
+                    .collisions
+                    .pass(&mut self.voxels, self.scene.voxel_size),
+                Pass::Floor => floor_pass(
+                    &mut self.voxels,
+                    &mut self.floor,
+                    0.5 * self.scene.voxel_size,
+                    self.dt,
+                ),
+                Pass::Integrate => summary = Some(integrate_pass(&mut self.voxels, self.dt)),
+            }
+        }
+        self.time += self.dt;
+        self.steps += 1;
+        let limits = &self.scene.divergence;
+        let diverged = |reason| Divergence {
+            reason,
+            time: self.time,
+            step: self.steps,
+        };
+        if let Some(sum) = summary {
+            if !sum.checksum.is_finite() || !max_strain.is_finite() {
+                return Err(diverged(DivergenceReason::NonFinite));
+            }
+            let travel = sum.max_speed2.sqrt() * self.dt / self.scene.voxel_size;
+            if travel > limits.max_step_travel {
+                return Err(diverged(DivergenceReason::Runaway {
+                    travel,
+                    limit: limits.max_step_travel,
+                }));
+            }
+        }
+        if max_strain > limits.max_strain {
+            return Err(diverged(DivergenceReason::Strain {
+                strain: max_strain,
+                limit: limits.max_strain,
+            }));
+        }
+        Ok(())
+    }
+
+    /// Runs for `duration` seconds (rounded up to whole steps).
+    pub fn run_for(&mut self, duration: f64) -> std::result::Result<(), Divergence> {
+        let steps = (duration / self.dt).ceil() as u64;
+        self.run_steps(steps)
+    }
+
+    pub fn run_steps(&mut self, steps: u64) -> std::result::Result<(), Divergence> {
+        for _ in 0..steps {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Overrides the automatic time step (s), e.g. for convergence studies.
+    pub fn set_dt(&mut self, dt: f64) {
+        self.dt = dt;
+    }
+
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    pub fn scene(&self) -> &DynamicScene {
+        &self.scene
+    }
+
+    pub fn voxel_count(&self) -> usize {
+        self.voxels.len()
+    }
+
+    pub fn link_count(&self) -> usize {
+        self.links.len()
+    }
+
+    pub fn positions(&self) -> &[Vec3] {
+        &self.voxels.position
+    }
+
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.voxels.velocity
+    }
+
+    pub fn orientations(&self) -> &[super::math::Quat] {
+        &self.voxels.orientation
+    }
+
+    /// Grid cell of each voxel.
+    pub fn cells(&self) -> &[[u16; 3]] {
+        &self.voxels.cell
+    }
+
+    pub fn centre_of_mass(&self) -> Vec3 {
+        let v = &self.voxels;
+        let (mut sum, mut mass) = (Vec3::ZERO, 0.0);
+        for i in 0..v.len() {
+            sum += v.position[i] * v.mass[i];
+            mass += v.mass[i];
+        }
+        sum * (1.0 / mass)
+    }
+
+    /// Largest voxel speed, m/s.
+    pub fn max_speed(&self) -> f64 {
+        self.voxels
+            .velocity
+            .iter()
+            .map(|v| v.norm2())
+            .fold(0.0, f64::max)
+            .sqrt()
+    }
+
+    pub fn linear_momentum(&self) -> Vec3 {
+        self.voxels
+            .momentum
+            .iter()
+            .fold(Vec3::ZERO, |acc, &p| acc + p)
+    }
+
+    /// Total angular momentum about the origin: Σ x × p + spin.
+    pub fn angular_momentum(&self) -> Vec3 {
+        let v = &self.voxels;
+        (0..v.len()).fold(Vec3::ZERO, |acc, i| {
+            acc + v.position[i].cross(v.momentum[i]) + v.angular_momentum[i]
+        })
+    }
+
+    pub fn energy(&self) -> Energy {
+        let v = &self.voxels;
+        let s = self.scene.voxel_size;
+        let mut kinetic = 0.0;
+        let mut gravitational = 0.0;
+        let mut contact = 0.0;
+        for i in 0..v.len() {
+            kinetic += 0.5 * v.momentum[i].norm2() * v.inv_mass[i]
+                + 0.5 * v.angular_momentum[i].norm2() * v.inv_inertia[i];
+            gravitational -= v.mass[i] * self.gravity.dot(v.position[i]);
+            if let Some(f) = self.external.get(i) {
+                gravitational -= f.dot(v.position[i]);
+            }
+            if !self.floor.stiffness.is_empty() {
+                let pen = (0.5 * s - v.position[i].z).max(0.0);
+                contact += 0.5 * self.floor.stiffness[i] * pen * pen;
+            }
+        }
+        let elastic = link_energy(
+            &self.links,
+            v,
+            LinkStep {
+                voxel_size: s,
+                actuation_factor: self.actuation_factor(),
+            },
+        );
+        Energy {
+            kinetic,
+            elastic,
+            gravitational,
+            contact,
+        }
+    }
+}

@@ -1,0 +1,181 @@
+//! The simulation state as flat arrays (structure of arrays): one array per voxel quantity and per
+//! link quantity, allocated once when the simulation is built, never inside the step loop.
+
+use super::error::{DynamicsError, Result};
+use super::math::{Quat, Vec3};
+use crate::material::{Palette, link_youngs_modulus};
+use crate::voxel::VoxelGrid;
+
+/// Per-voxel state and constants. Index `i` is the i-th filled cell in grid order.
+#[derive(Clone, Debug, Default)]
+pub struct Voxels {
+    pub position: Vec<Vec3>,
+    pub orientation: Vec<Quat>,
+    pub momentum: Vec<Vec3>,
+    pub angular_momentum: Vec<Vec3>,
+    /// Velocity and angular velocity, kept in step with the momenta for the link damping.
+    pub velocity: Vec<Vec3>,
+    pub angular_velocity: Vec<Vec3>,
+    /// Force and torque accumulated by the passes of the current step.
+    pub force: Vec<Vec3>,
+    pub torque: Vec<Vec3>,
+    pub mass: Vec<f64>,
+    /// 1/m, or 0 for a fixed voxel (so a fixed voxel never moves, without a branch).
+    pub inv_mass: Vec<f64>,
+    /// 1/I with I = m s²/6 (a cube's inertia about any axis through its centre), or 0 if fixed.
+    pub inv_inertia: Vec<f64>,
+    /// Axial stiffness E·s of the voxel's own material, N/m (contact and global damping scale).
+    pub stiffness: Vec<f64>,
+    pub static_friction: Vec<f64>,
+    pub kinetic_friction: Vec<f64>,
+    /// Grid cell of the voxel (x, y, z), for collision adjacency and reporting.
+    pub cell: Vec<[u16; 3]>,
+    /// Whether the voxel's material is actuated.
+    pub actuated: Vec<bool>,
+}
+
+impl Voxels {
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+}
+
+/// Per-link constants. A link joins voxel `a` to voxel `b`, `b` lying at +s along `axis` from `a`
+/// in the rest configuration. Stiffness terms are for a square s×s section of length s:
+/// A = s², I = s⁴/12, J = s⁴/6 (polar approximation).
+#[derive(Clone, Debug, Default)]
+pub struct Links {
+    pub a: Vec<u32>,
+    pub b: Vec<u32>,
+    pub axis: Vec<u8>,
+    /// EA/L, N/m.
+    pub axial: Vec<f64>,
+    /// 12EI/L³, N/m (equal to EA/L for a cube-shaped link, kept separate for clarity).
+    pub shear: Vec<f64>,
+    /// 6EI/L², N.
+    pub coupling: Vec<f64>,
+    /// EI/L, N·m (the 4EI/L and 2EI/L terms combine into ±EI/L in the mid frame, see `link`).
+    pub bending: Vec<f64>,
+    /// GJ/L, N·m.
+    pub torsion: Vec<f64>,
+    /// Translational damping coefficient 2ζ√(m_red·EA/L), N·s/m.
+    pub damping: Vec<f64>,
+    /// Rotational damping coefficient 2ζ√(I_red·EI/L), N·m·s.
+    pub angular_damping: Vec<f64>,
+    /// Fraction of the link that actuates: 0, 0.5 (one actuated end) or 1.
+    pub actuated_fraction: Vec<f64>,
+}
+
+impl Links {
+    pub fn len(&self) -> usize {
+        self.a.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.a.is_empty()
+    }
+}
+
+/// Builds voxels and links from a grid: voxel centres at ((x, y, z) + ½)·s, one link per pair of
+/// face-adjacent filled cells. `link_damping` is the link damping ratio ζ.
+pub fn build_state(
+    grid: &VoxelGrid,
+    palette: &Palette,
+    voxel_size: f64,
+    link_damping: f64,
+) -> Result<(Voxels, Links)> {
+    palette.validate()?;
+    let dims = grid.dims();
+    let count = grid.filled_count();
+    if count == 0 {
+        return Err(DynamicsError::Empty);
+    }
+    let s = voxel_size;
+    let mut v = Voxels::default();
+    let mut voxel_of_cell = vec![u32::MAX; dims.cell_count()];
+    for (cell_index, material) in grid.cells().iter().enumerate() {
+        let Some(material) = material else { continue };
+        if material.index() >= palette.len() {
+            return Err(DynamicsError::UnknownMaterial {
+                material: material.index(),
+                palette_len: palette.len(),
+            });
+        }
+        let m = palette.get(*material);
+        let [x, y, z] = dims.coords(cell_index);
+        voxel_of_cell[cell_index] = v.len() as u32;
+        let mass = m.density * s * s * s;
+        v.position.push(Vec3::new(
+            (x as f64 + 0.5) * s,
+            (y as f64 + 0.5) * s,
+            (z as f64 + 0.5) * s,
+        ));
+        v.orientation.push(Quat::IDENTITY);
+        v.mass.push(mass);
+        v.inv_mass.push(1.0 / mass);
+        v.inv_inertia.push(6.0 / (mass * s * s));
+        v.stiffness.push(m.youngs_modulus * s);
+        v.static_friction.push(m.static_friction);
+        v.kinetic_friction.push(m.kinetic_friction);
+        v.cell.push([x as u16, y as u16, z as u16]);
+        v.actuated.push(m.actuated);
+    }
+    let n = v.len();
+    for field in [
+        &mut v.momentum,
+        &mut v.angular_momentum,
+        &mut v.velocity,
+        &mut v.angular_velocity,
+        &mut v.force,
+        &mut v.torque,
+    ] {
+        *field = vec![Vec3::ZERO; n];
+    }
+
+    let mut l = Links::default();
+    for (cell_index, material) in grid.cells().iter().enumerate() {
+        let Some(ma) = material else { continue };
+        let [x, y, z] = dims.coords(cell_index);
+        for axis in 0..3u8 {
+            let (nx, ny, nz) = match axis {
+                0 => (x + 1, y, z),
+                1 => (x, y + 1, z),
+                _ => (x, y, z + 1),
+            };
+            if nx >= dims.nx || ny >= dims.ny || nz >= dims.nz {
+                continue;
+            }
+            let Some(mb) = grid.get(nx, ny, nz) else {
+                continue;
+            };
+            let (a, b) = (
+                voxel_of_cell[cell_index],
+                voxel_of_cell[dims.index(nx, ny, nz)],
+            );
+            let (pa, pb) = (palette.get(*ma), palette.get(mb));
+            let e = link_youngs_modulus(pa.youngs_modulus, pb.youngs_modulus);
+            let g = link_youngs_modulus(pa.shear_modulus(), pb.shear_modulus());
+            let (area, inertia, polar) = (s * s, s.powi(4) / 12.0, s.powi(4) / 6.0);
+            let axial = e * area / s;
+            let bending = e * inertia / s;
+            l.a.push(a);
+            l.b.push(b);
+            l.axis.push(axis);
+            l.axial.push(axial);
+            l.shear.push(12.0 * e * inertia / (s * s * s));
+            l.coupling.push(6.0 * e * inertia / (s * s));
+            l.bending.push(bending);
+            l.torsion.push(g * polar / s);
+            let (m_a, m_b) = (v.mass[a as usize], v.mass[b as usize]);
+            let reduced_mass = m_a * m_b / (m_a + m_b);
+            let reduced_inertia = reduced_mass * s * s / 6.0;
+            l.damping
+                .push(2.0 * link_damping * (reduced_mass * axial).sqrt());
+            l.angular_damping
+                .push(2.0 * link_damping * (reduced_inertia * bending).sqrt());
+            l.actuated_fraction
+                .push(0.5 * (f64::from(u8::from(pa.actuated)) + f64::from(u8::from(pb.actuated))));
+        }
+    }
+    Ok((v, l))
+}

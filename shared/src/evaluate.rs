@@ -1,0 +1,14 @@
+//! One evaluation: genome + scene + resolution → outcome. Pure and deterministic.
+
+use crate::beam::evaluate_beam;
+use crate::genome::Genome;
+use crate::outcome::Outcome;
+use crate::scene::Scene;
+use crate::voxel::GridDims;
+
+/// Evaluates `genome` in `scene` at resolution `dims`.
+pub fn evaluate(genome: &Genome, scene: &Scene, dims: GridDims) -> Outcome {
+    match scene {
+        Scene::Beam(beam) => evaluate_beam(genome, beam, dims),
+    }
+}

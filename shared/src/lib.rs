@@ -1,0 +1,14 @@
+//! Amorph's science, with no networking: Gaussian-mixture genomes, voxelization, the static
+//! direct-stiffness solver, the dynamic voxel soft-body simulator, the tasks built on them and the
+//! fabrication exports. Everything here is a pure function of its inputs: the same genome, scene and
+//! resolution give the same bits on any machine.
+
+pub mod beam;
+pub mod dynamics;
+pub mod evaluate;
+pub mod genome;
+pub mod material;
+pub mod outcome;
+pub mod scene;
+pub mod statics;
+pub mod voxel;

@@ -1,0 +1,126 @@
+//! Block sparse row (BSR) storage with 6×6 blocks: every node (or coarse aggregate) carries six
+//! unknowns, so one column index serves 36 values and the inner loops are fixed-size.
+
+use super::element::Block;
+
+/// A square block-sparse matrix, full (not triangular) storage, columns sorted in each row.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct BlockMatrix {
+    /// Block rows.
+    pub n: usize,
+    pub row_ptr: Vec<usize>,
+    pub cols: Vec<u32>,
+    pub blocks: Vec<Block>,
+}
+
+/// y += B x for one block.
+#[inline(always)]
+pub(crate) fn block_mul_add(b: &Block, x: &[f64], y: &mut [f64; 6]) {
+    let x: &[f64; 6] = x.try_into().expect("six unknowns per node");
+    for (r, yr) in y.iter_mut().enumerate() {
+        let row: &[f64; 6] = b[6 * r..6 * r + 6].try_into().expect("block row");
+        *yr += row[0] * x[0]
+            + row[1] * x[1]
+            + row[2] * x[2]
+            + row[3] * x[3]
+            + row[4] * x[4]
+            + row[5] * x[5];
+    }
+}
+
+/// C += A B for blocks.
+#[inline(always)]
+pub(crate) fn block_gemm_add(a: &Block, b: &Block, c: &mut Block) {
+    for r in 0..6 {
+        for k in 0..6 {
+            let ark = a[6 * r + k];
+            if ark == 0.0 {
+                continue;
+            }
+            for col in 0..6 {
+                c[6 * r + col] += ark * b[6 * k + col];
+            }
+        }
+    }
+}
+
+impl BlockMatrix {
+    /// Number of scalar rows.
+    pub fn dof(&self) -> usize {
+        6 * self.n
+    }
+
+    pub fn row(&self, r: usize) -> (&[u32], &[Block]) {
+        let range = self.row_ptr[r]..self.row_ptr[r + 1];
+        (&self.cols[range.clone()], &self.blocks[range])
+    }
+
+    /// y = A x.
+    pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
+            let (cols, blocks) = self.row(r);
+            let mut acc = [0.0; 6];
+            for (&c, b) in cols.iter().zip(blocks) {
+                let c = c as usize;
+                block_mul_add(b, &x[6 * c..6 * c + 6], &mut acc);
+            }
+            y_row.copy_from_slice(&acc);
+        }
+    }
+
+    /// Position of the diagonal block of every row.
+    pub fn diagonal_positions(&self) -> Vec<usize> {
+        (0..self.n)
+            .map(|r| {
+                let (cols, _) = self.row(r);
+                let k = cols
+                    .binary_search(&(r as u32))
+                    .expect("every row stores its diagonal block");
+                self.row_ptr[r] + k
+            })
+            .collect()
+    }
+
+    /// The transpose, for a rectangular matrix with `ncols` block columns.
+    pub fn transpose(&self, ncols: usize) -> BlockMatrix {
+        let mut counts = vec![0usize; ncols + 1];
+        for &c in &self.cols {
+            counts[c as usize + 1] += 1;
+        }
+        for k in 0..ncols {
+            counts[k + 1] += counts[k];
+        }
+        let mut next = counts.clone();
+        let mut cols = vec![0u32; self.cols.len()];
+        let mut blocks = vec![[0.0; 36]; self.cols.len()];
+        for r in 0..self.n {
+            let (rc, rb) = self.row(r);
+            for (&c, b) in rc.iter().zip(rb) {
+                let slot = &mut next[c as usize];
+                cols[*slot] = r as u32;
+                blocks[*slot] = super::element::transpose(b);
+                *slot += 1;
+            }
+        }
+        BlockMatrix {
+            n: ncols,
+            row_ptr: counts,
+            cols,
+            blocks,
+        }
+    }
+}
+
+/// Inverts an SPD 6×6 block by Cholesky; `None` if it is not positive definite.
+pub(crate) fn invert_spd_block(b: &Block) -> Option<Block> {
+    let m = nalgebra::Matrix6::from_row_slice(b);
+    let chol = m.cholesky()?;
+    let inv = chol.inverse();
+    let mut out = [0.0; 36];
+    for r in 0..6 {
+        for c in 0..6 {
+            out[6 * r + c] = inv[(r, c)];
+        }
+    }
+    Some(out)
+}

@@ -1,0 +1,59 @@
+//! `worker evaluate`: evaluates a saved genome in a scene at a resolution and prints the outcome.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(version, about = "Amorph worker: stateless evaluation of genomes")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Evaluates one genome (a genome JSON, or a results file such as best_genome.json) and prints
+    /// its outcome as JSON.
+    Evaluate {
+        #[arg(long)]
+        genome: PathBuf,
+        /// A run config (its [scene] is used) or a bare scene TOML.
+        #[arg(long)]
+        scene: PathBuf,
+        /// Resolution as NXxNYxNZ, e.g. 12x12x40.
+        #[arg(long)]
+        resolution: String,
+    },
+}
+
+fn main() -> std::process::ExitCode {
+    match try_main(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn try_main(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Evaluate {
+            genome,
+            scene,
+            resolution,
+        } => {
+            let genome = amorph_worker::read_genome(&genome)?;
+            let scene = amorph_worker::read_scene(&scene)?;
+            let dims = amorph_worker::parse_resolution(&resolution)?;
+            let outcome = amorph_worker::evaluate(&genome, &scene, dims);
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
+            );
+        }
+    }
+    Ok(())
+}
