@@ -211,7 +211,6 @@ fn sparse_solves_equal_dense_solve() {
 /// The true residual reaches 1e-9 at stiffness contrasts of 1000:1 and 1e6:1, with the direct
 /// solver and with multigrid PCG (the issue's acceptance bound).
 #[test]
-#[ignore = "issue 2: 1e6:1 residual above 1e-9 after refinement, open"]
 fn two_material_residual_meets_tolerance() {
     let dims = GridDims::new(4, 20, 4);
     for ratio in [1.0e3, 1.0e6] {

@@ -6,8 +6,12 @@ use amorph::statics::{StaticLoadCase, StaticModel, StaticSolverParams, solve};
 use amorph::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
 use proptest::prelude::*;
 
-/// ‖K u − f‖ / ‖f‖ over the free DOF, in SI units, with K summed from the triplets.
-fn residual(model: &StaticModel, case: &StaticLoadCase, u: &[[f64; 6]]) -> f64 {
+/// ‖K u − f‖ / ‖f‖ over the free DOF, in SI units, with K summed from the triplets, and the
+/// double-precision floor of that measurement, 64 eps ‖|K| |u|‖ / ‖f‖. The floor bounds two errors
+/// that no solver can remove: rounding the solution to doubles (|K δu| ≤ eps |K| |u|) and the
+/// plain summation of this check (γ_n |K| |u| with n ≤ 42 terms per row; Higham, ch. 3). At
+/// 1e6:1 contrast ‖|K||u|‖/‖f‖ reaches ~1e8, so the floor is then above the 1e-9 tolerance.
+fn residual(model: &StaticModel, case: &StaticLoadCase, u: &[[f64; 6]]) -> (f64, f64) {
     let n = model.node_count();
     let mut fixed = vec![false; n];
     for &f in &case.fixed_nodes {
@@ -19,8 +23,10 @@ fn residual(model: &StaticModel, case: &StaticLoadCase, u: &[[f64; 6]]) -> f64 {
             r[6 * node + c] += l;
         }
     }
+    let mut magnitude = vec![0.0; 6 * n];
     for (row, col, v) in model.stiffness_triplets() {
         r[row] -= v * u[col / 6][col % 6];
+        magnitude[row] += (v * u[col / 6][col % 6]).abs();
     }
     let norm = |v: &[f64]| {
         v.chunks_exact(6)
@@ -36,16 +42,20 @@ fn residual(model: &StaticModel, case: &StaticLoadCase, u: &[[f64; 6]]) -> f64 {
             f[6 * node + c] += l;
         }
     }
-    norm(&r) / norm(&f)
+    (
+        norm(&r) / norm(&f),
+        64.0 * f64::EPSILON * norm(&magnitude) / norm(&f),
+    )
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
     /// Every solver meets K u = f to its tolerance 1e-9 (the residual is measured here with an
-    /// independent SI assembly, so 1e-9 plus round-off: 2e-9).
+    /// independent SI assembly, so 1e-9 plus round-off: 2e-9, plus the double-precision floor of
+    /// the returned displacements, see `residual`). The solvers' own diagnostics, computed on the
+    /// unrounded solution with compensated sums, must meet 1e-9 outright.
     #[test]
-    #[ignore = "issue 2: fails at 1e6 contrast, open"]
     fn solve_reproduces_k_u_equals_f(
         cells in prop::collection::vec(0u8..4, 4 * 6 * 3),
         contrast in prop::sample::select(vec![1.0, 1.0e3, 1.0e6]),
@@ -80,8 +90,13 @@ proptest! {
         for mut params in [StaticSolverParams::direct(), StaticSolverParams::multigrid_pcg()] {
             params.multigrid.coarse_max_nodes = 4;
             let solution = solve(&model, &case, &params).unwrap();
-            let r = residual(&model, &case, &solution.displacements);
-            prop_assert!(r < 2e-9, "{:?}: residual {r:e}", solution.diagnostics);
+            let (r, floor) = residual(&model, &case, &solution.displacements);
+            prop_assert!(solution.diagnostics.relative_residual <= 1e-9, "{:?}", solution.diagnostics);
+            prop_assert!(
+                r < 2e-9 + floor,
+                "{:?}: residual {r:e}, floor {floor:e}",
+                solution.diagnostics
+            );
         }
     }
 }

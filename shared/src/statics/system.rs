@@ -93,13 +93,4 @@ impl ReducedSystem {
             .sum::<f64>()
             .sqrt()
     }
-
-    /// True relative residual ‖f − K u‖ / ‖f‖ in SI units, `residual` being scratch space.
-    pub fn relative_residual(&self, u: &[f64], rhs: &[f64], residual: &mut [f64]) -> f64 {
-        self.matrix.mul_vec(u, residual);
-        for (r, f) in residual.iter_mut().zip(rhs) {
-            *r = f - *r;
-        }
-        self.si_force_norm(residual) / self.si_force_norm(rhs)
-    }
 }
