@@ -93,7 +93,7 @@ pub struct BeamMetrics {
     pub voxels: usize,
     /// Of those, how many of each material.
     pub material_counts: Vec<usize>,
-    /// Top-surface voxels compared with the target.
+    /// Top-surface voxels (the highest of each column), averaged per station into the profile.
     pub surface_voxels: usize,
     /// Per station along the beam: normalized position, mean normalized deflection, target.
     pub profile: Vec<[f64; 3]>,
@@ -183,17 +183,17 @@ pub fn evaluate_beam_design(grid: &VoxelGrid, scene: &BeamScene) -> Outcome {
         )));
     }
 
+    // The profile along the beam: at every station (layer y ≥ 1) the mean deflection of the
+    // top-surface voxels, normalized by the tip's. Comparing station means, not every column,
+    // keeps the fitness independent of the design's width (a column count would reward narrow
+    // beams) and makes fitness and RMS error two monotone views of one number.
     let station = |y: usize| y as f64 / tip_y as f64;
-    let mut sum_sq = 0.0;
     let mut per_station = vec![(0.0, 0usize); dims.ny];
     for &(y, w) in &surface {
-        let w = w / tip_deflection;
-        let d = w - scene.target.deflection(station(y));
-        sum_sq += d * d;
-        per_station[y].0 += w;
+        per_station[y].0 += w / tip_deflection;
         per_station[y].1 += 1;
     }
-    let profile = std::iter::once([0.0, 0.0, 0.0])
+    let profile: Vec<[f64; 3]> = std::iter::once([0.0, 0.0, 0.0])
         .chain(
             per_station
                 .iter()
@@ -205,8 +205,13 @@ pub fn evaluate_beam_design(grid: &VoxelGrid, scene: &BeamScene) -> Outcome {
                 }),
         )
         .collect();
+    let stations = &profile[1..];
+    let sum_sq: f64 = stations
+        .iter()
+        .map(|[_, w, target]| (w - target).powi(2))
+        .sum();
     let metrics = BeamMetrics {
-        rms_percent: 100.0 * (sum_sq / surface.len() as f64).sqrt(),
+        rms_percent: 100.0 * (sum_sq / stations.len() as f64).sqrt(),
         tip_deflection,
         voxels: grid.filled_count(),
         material_counts: grid.material_counts(scene.palette.len()),
