@@ -19,11 +19,24 @@ fn homogeneous(dims: GridDims) -> VoxelGrid {
     VoxelGrid::filled(dims, MaterialId(0))
 }
 
-/// Every cell filled, the material chosen by a seeded random genome of 24 points.
+/// Every cell filled, the material chosen by a seeded random genome of 24 points. Densities are
+/// made positive so both materials win regions (with signed densities a seed can leave one
+/// material nowhere on top, and the "two-material" case would silently be homogeneous).
 fn two_material(dims: GridDims, seed: u64) -> VoxelGrid {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let genome = random_genome(&mut rng, 24, &GenomeLimits::default(), 2);
-    voxelize(&genome, dims, 2, f64::NEG_INFINITY)
+    let mut genome = random_genome(&mut rng, 24, &GenomeLimits::default(), 2);
+    genome
+        .points
+        .iter_mut()
+        .for_each(|p| p.density = p.density.abs());
+    let grid = voxelize(&genome, dims, 2, f64::NEG_INFINITY);
+    let counts = grid.material_counts(2);
+    eprintln!(
+        "two-material {dims}: {} hard, {} soft voxels",
+        counts[0], counts[1]
+    );
+    assert!(counts.iter().all(|&c| c > 0), "{counts:?}");
+    grid
 }
 
 fn cantilever(model: &StaticModel) -> StaticLoadCase {

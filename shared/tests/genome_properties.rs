@@ -104,8 +104,9 @@ proptest! {
 /// A genome voxelized at twice the resolution and coarsened agrees with the direct voxelization on
 /// most voxels. Disagreements can only sit where the density crosses the threshold or two materials
 /// tie within a voxel, i.e. on surfaces and material boundaries; over 200 random 40-point genomes
-/// at 6x6x20 vs 12x12x40 we measured a mean agreement of 97.4 % and a worst case of 92 %, so the
-/// bounds below (mean ≥ 95 %, every genome ≥ 88 %) leave room only for that boundary effect.
+/// at 6x6x20 vs 12x12x40 we measured a mean agreement of 99.31 % and a worst case of 97.22 %
+/// (coarse cells; the fine grid votes by majority of its 8 children), so the bounds below
+/// (mean ≥ 98.5 %, every genome ≥ 95 %) leave room only for that boundary effect.
 #[test]
 fn voxelization_is_resolution_consistent() {
     let coarse = GridDims::new(6, 6, 20);
@@ -126,6 +127,6 @@ fn voxelization_is_resolution_consistent() {
     let mean = agreements.iter().sum::<f64>() / agreements.len() as f64;
     let worst = agreements.iter().copied().fold(1.0, f64::min);
     println!("resolution consistency: mean {mean:.4}, worst {worst:.4}");
-    assert!(mean >= 0.95, "mean agreement {mean}");
-    assert!(worst >= 0.88, "worst agreement {worst}");
+    assert!(mean >= 0.985, "mean agreement {mean}");
+    assert!(worst >= 0.95, "worst agreement {worst}");
 }

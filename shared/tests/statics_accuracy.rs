@@ -62,6 +62,10 @@ fn slender_beam_matches_euler_bernoulli() {
     let analytic = force * length.powi(3) / (3.0 * e * inertia);
     let computed = tip_deflection(&model, &solution.displacements);
     let error = (computed - analytic).abs() / analytic;
+    println!(
+        "slender 2x40x2: computed {computed:e} m, Euler-Bernoulli {analytic:e} m, error {:+.3} %",
+        100.0 * (computed - analytic) / analytic
+    );
     assert!(
         error < 5e-3,
         "computed {computed:e} analytic {analytic:e} error {:.3} %",
