@@ -56,7 +56,6 @@ fn tip_z(sim: &Simulation, tip: &[usize]) -> f64 {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn static_tip_deflection_matches_beam_theory_within_1_percent() {
     // Global damping near critical for the first mode settles it in ~0.3 s; damping does not
     // change the static equilibrium.

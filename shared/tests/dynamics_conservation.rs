@@ -14,7 +14,6 @@ fn relative(a: Vec3, b: Vec3) -> f64 {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn free_rigid_motion_keeps_shape_and_momenta() {
     let grid = VoxelGrid::filled(GridDims::new(3, 4, 2), MaterialId(0));
     // Link damping on: it must not damp rigid motion (it acts on relative motion only).
@@ -96,7 +95,6 @@ fn trajectory() -> Vec<Vec3> {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn same_scene_twice_is_bit_identical() {
     // Every pass on (floor, friction, gravity, collisions, actuation, damping).
     let (a, b) = (trajectory(), trajectory());

@@ -40,7 +40,6 @@ fn block_holds_below_the_friction_angle() {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn block_slides_above_the_friction_angle_with_the_kinetic_acceleration() {
     let theta: f64 = 50.0_f64.to_radians();
     let mut sim = block_on_incline(50.0);
