@@ -225,6 +225,23 @@ impl Simulation {
         Ok(())
     }
 
+    /// Tilts the floor to `incline` rad (gravity turns about +Y, "downhill" is +X), e.g. to raise
+    /// an incline slowly as in a tilt-table friction measurement. Needs a floor and
+    /// |incline| < π/2.
+    pub fn set_incline(&mut self, incline: f64) -> Result<()> {
+        let valid = incline.abs() < std::f64::consts::FRAC_PI_2; // false for NaN
+        let Some(floor) = self.scene.floor.as_mut().filter(|_| valid) else {
+            return Err(DynamicsError::InvalidScene {
+                field: "floor.incline",
+                value: incline,
+            });
+        };
+        floor.incline = incline;
+        let g = self.scene.gravity;
+        self.gravity = Vec3::new(g * incline.sin(), 0.0, -g * incline.cos());
+        Ok(())
+    }
+
     /// Applies a constant external force (N) to voxel `i`, in addition to any other.
     pub fn add_external_force(&mut self, i: usize, force: Vec3) -> Result<()> {
         self.check_index(i)?;
