@@ -62,7 +62,6 @@ fn on_floor(voxel_size: f64) -> DynamicScene {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn stiffness_ratio_1e4_in_one_body() {
     let palette = Palette(vec![material(1e9, false), material(1e5, false)]);
     let grid = block([4, 4, 4], |x, _, _| u8::from(x >= 2));
@@ -70,7 +69,6 @@ fn stiffness_ratio_1e4_in_one_body() {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn youngs_modulus_from_1e3_to_1e10_pa() {
     for e in [1e3, 1e6, 1e10] {
         let palette = Palette(vec![material(e, false)]);
@@ -84,7 +82,6 @@ fn youngs_modulus_from_1e3_to_1e10_pa() {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn voxel_size_from_1e_4_to_1_m() {
     for s in [1e-4, 1e-2, 1.0] {
         let palette = Palette(vec![material(1e6, false)]);
@@ -142,7 +139,6 @@ fn slender_chain_of_100_voxels() {
 }
 
 #[test]
-#[ignore = "issue 3: fails, not yet investigated"]
 fn actuation_of_50_percent_volume() {
     let palette = Palette(vec![material(1e6, false), material(1e6, true)]);
     let grid = block([4, 4, 4], |x, _, _| u8::from(x < 2));

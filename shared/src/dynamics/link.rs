@@ -75,6 +75,22 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
         let delta = d.x - rest;
         max_strain = max_strain.max(delta.abs());
 
+        // Generalised deformation: the elastic one, plus β times its rate when damped
+        // (stiffness-proportional damping through the same element, so it dissipates, leaves
+        // rigid motion alone and balances its moments exactly like the elastic forces).
+        let (mut e, mut p) = (Vec3::new(delta, d.y, d.z), phi);
+        if DAMPED {
+            // Rate of d in the link frame, which turns with the mean spin of the pair.
+            let spin = (angular_velocity[ia] + angular_velocity[ib]) * 0.5;
+            let v_rel = velocity[ib] - velocity[ia] - spin.cross(r_world);
+            let beta = links.damping_time[k];
+            e += frame.apply_transpose(v_rel).to_axis(axis) * beta;
+            p += frame
+                .apply_transpose(angular_velocity[ib] - angular_velocity[ia])
+                .to_axis(axis)
+                * beta;
+        }
+
         let (ka, ks, kc, kb, kt) = (
             links.axial[k],
             links.shear[k],
@@ -82,28 +98,16 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
             links.bending[k],
             links.torsion[k],
         );
-        let f_b = Vec3::new(-ka * delta, -ks * d.y, -ks * d.z);
-        let mut m_a = Vec3::new(kt * phi.x, kb * phi.y - kc * d.z, kb * phi.z + kc * d.y);
-        let mut m_b = Vec3::new(-kt * phi.x, -kb * phi.y - kc * d.z, -kb * phi.z + kc * d.y);
+        let f_b = Vec3::new(-ka * e.x, -ks * e.y, -ks * e.z);
+        let mut m_a = Vec3::new(kt * p.x, kb * p.y - kc * e.z, kb * p.z + kc * e.y);
+        let mut m_b = Vec3::new(-kt * p.x, -kb * p.y - kc * e.z, -kb * p.z + kc * e.y);
         let half_residual = (m_a + m_b + d.cross(f_b)) * 0.5;
         m_a -= half_residual;
         m_b -= half_residual;
 
-        let mut f_b_world = frame.apply(f_b.unshift_axis(axis));
-        let mut m_a_world = frame.apply(m_a.unshift_axis(axis));
-        let mut m_b_world = frame.apply(m_b.unshift_axis(axis));
-
-        if DAMPED {
-            // Relative velocity without the pair's rigid rotation, so spinning is not damped.
-            let spin = (angular_velocity[ia] + angular_velocity[ib]) * 0.5;
-            let v_rel = velocity[ib] - velocity[ia] - spin.cross(r_world);
-            let f_damp = v_rel * (-links.damping[k]);
-            let m_damp = (angular_velocity[ib] - angular_velocity[ia]) * links.angular_damping[k];
-            let half_residual = r_world.cross(f_damp) * 0.5;
-            f_b_world += f_damp;
-            m_a_world += m_damp - half_residual;
-            m_b_world -= m_damp + half_residual;
-        }
+        let f_b_world = frame.apply(f_b.unshift_axis(axis));
+        let m_a_world = frame.apply(m_a.unshift_axis(axis));
+        let m_b_world = frame.apply(m_b.unshift_axis(axis));
 
         force[ib] += f_b_world;
         force[ia] -= f_b_world;

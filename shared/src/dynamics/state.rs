@@ -58,10 +58,9 @@ pub struct Links {
     pub bending: Vec<f64>,
     /// GJ/L, N·m.
     pub torsion: Vec<f64>,
-    /// Translational damping coefficient 2ζ√(m_red·EA/L), N·s/m.
-    pub damping: Vec<f64>,
-    /// Rotational damping coefficient 2ζ√(I_red·EI/L), N·m·s.
-    pub angular_damping: Vec<f64>,
+    /// Stiffness-proportional damping time β = 2ζ/ω_top, s: the link's damping forces are its
+    /// elastic forces evaluated on the deformation *rates* times β (see [`TOP_EIGENVALUE`]).
+    pub damping_time: Vec<f64>,
     /// Fraction of the link that actuates: 0, 0.5 (one actuated end) or 1.
     pub actuated_fraction: Vec<f64>,
 }
@@ -75,6 +74,14 @@ impl Links {
         self.a.is_empty()
     }
 }
+
+/// Highest eigenvalue of M⁻¹K of a dense voxel lattice in units of (EA/L)/m: the top of the
+/// spectrum of the frame-link lattice with I = m s²/6 is ω_top² ≈ 13.2·EA/(L m) (power iteration
+/// on a 6³ block, 13.1; a 2-voxel pair has 5, a chain 6, a sheet 11.9; see the unit test in
+/// `simulation.rs`). Link damping is stiffness-proportional with β = 2ζ/ω_top, so the fastest
+/// mode of the lattice gets the damping ratio ζ and a mode of frequency ω gets ζ·ω/ω_top.
+/// Rounded up to 14 so that ζ never exceeds the requested ratio.
+pub const TOP_EIGENVALUE: f64 = 14.0;
 
 /// Builds voxels and links from a grid: voxel centres at ((x, y, z) + ½)·s, one link per pair of
 /// face-adjacent filled cells. `link_damping` is the link damping ratio ζ.
@@ -166,13 +173,9 @@ pub fn build_state(
             l.coupling.push(6.0 * e * inertia / (s * s));
             l.bending.push(bending);
             l.torsion.push(g * polar / s);
-            let (m_a, m_b) = (v.mass[a as usize], v.mass[b as usize]);
-            let reduced_mass = m_a * m_b / (m_a + m_b);
-            let reduced_inertia = reduced_mass * s * s / 6.0;
-            l.damping
-                .push(2.0 * link_damping * (reduced_mass * axial).sqrt());
-            l.angular_damping
-                .push(2.0 * link_damping * (reduced_inertia * bending).sqrt());
+            let m_min = v.mass[a as usize].min(v.mass[b as usize]);
+            let omega_top = (TOP_EIGENVALUE * axial / m_min).sqrt();
+            l.damping_time.push(2.0 * link_damping / omega_top);
             l.actuated_fraction
                 .push(0.5 * (f64::from(u8::from(pa.actuated)) + f64::from(u8::from(pb.actuated))));
         }
