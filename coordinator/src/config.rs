@@ -205,6 +205,9 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     {
         return Err("budget.target_rms_percent must be a non-negative number".into());
     }
+    if b.target_rms_percent.is_some() && !matches!(raw.scene, amorph::scene::Scene::Beam(_)) {
+        return Err("budget.target_rms_percent applies to beam scenes only".into());
+    }
     raw.resolution.validate()?;
     raw.scene.validate().map_err(|e| format!("scene: {e}"))?;
     Ok(())

@@ -37,10 +37,11 @@ impl Progress {
         self.bar.inc(1);
     }
 
-    pub fn epoch(&self, epoch: usize, best_rms: Option<f64>, dims: GridDims) {
-        let rms = best_rms.map_or("-".into(), |r| format!("{r:.3} %"));
+    /// `best` is the task's headline figure of the best design so far (RMS error, speed).
+    pub fn epoch(&self, epoch: usize, best: Option<String>, dims: GridDims) {
+        let best = best.unwrap_or_else(|| "-".into());
         self.bar
-            .set_message(format!("epoch {epoch}, {dims}, best RMS {rms}"));
+            .set_message(format!("epoch {epoch}, {dims}, best {best}"));
     }
 
     pub fn finish(&self, summary: &RunSummary) {

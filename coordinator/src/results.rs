@@ -17,7 +17,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 
-use amorph::beam::beam_design;
+use amorph::beam::BeamScene;
 use amorph::genome::Genome;
 use amorph::outcome::Outcome;
 use amorph::scene::Scene;
@@ -143,12 +143,39 @@ impl ResultWriter {
             .collect();
         write_json(&self.dir.join("population.json"), &populations)?;
 
-        let Scene::Beam(beam) = scene;
-        let grid = beam_design(&best.genome, beam, summary.dims);
+        let grid = scene.design(&best.genome, summary.dims);
         write_json(
             &self.dir.join("best_voxels.json"),
             &voxels_json(&grid, scene),
         )?;
+        let common = serde_json::json!({
+            "name": self.config.raw.name,
+            "stop": summary.stop,
+            "epochs": summary.epochs,
+            "evaluations": summary.evaluations,
+            "wall_seconds": summary.wall_seconds,
+            "resolution": summary.dims.to_string(),
+            "best_fitness": best.outcome.fitness(),
+        });
+        let (task, md) = match scene {
+            Scene::Beam(beam) => self.beam_summary(beam, best, summary)?,
+            Scene::Locomotion(_) => locomotion_summary(&self.config.raw.name, best, summary),
+        };
+        let mut json = common;
+        if let (Some(json), Some(task)) = (json.as_object_mut(), task.as_object()) {
+            json.extend(task.clone());
+        }
+        write_json(&self.dir.join("summary.json"), &json)?;
+        std::fs::write(self.dir.join("summary.md"), md)
+    }
+
+    /// The beam's profile.csv, and its summary fields and Table-III-style line.
+    fn beam_summary(
+        &self,
+        beam: &BeamScene,
+        best: &Individual,
+        summary: &RunSummary,
+    ) -> std::io::Result<(serde_json::Value, String)> {
         let metrics = best.outcome.beam_metrics();
         if let Some(m) = metrics {
             let mut csv = String::from("t,simulated,target\n");
@@ -160,20 +187,12 @@ impl ResultWriter {
         let rms = metrics.map(|m| m.rms_percent);
         let paper = beam.target.paper_rms_percent();
         let json = serde_json::json!({
-            "name": self.config.raw.name,
             "target": beam.target.name(),
-            "stop": summary.stop,
-            "epochs": summary.epochs,
-            "evaluations": summary.evaluations,
-            "wall_seconds": summary.wall_seconds,
-            "resolution": summary.dims.to_string(),
-            "best_fitness": best.outcome.fitness(),
             "best_rms_percent": rms,
             "paper_rms_percent": paper,
             "voxels": metrics.map(|m| m.voxels),
             "material_counts": metrics.map(|m| m.material_counts.clone()),
         });
-        write_json(&self.dir.join("summary.json"), &json)?;
         let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} %"));
         let md = format!(
             "# Run `{}`\n\n| target | best RMS error | paper (simulated) | evaluations | wall time | resolution | stop |\n|---|---|---|---|---|---|---|\n| {} | {} | {} | {} | {:.1} s | {} | {:?} |\n",
@@ -186,8 +205,40 @@ impl ResultWriter {
             summary.dims,
             summary.stop,
         );
-        std::fs::write(self.dir.join("summary.md"), md)
+        Ok((json, md))
     }
+}
+
+/// The robot's summary fields and Table-IV-style line (the paper's robot: 3.38 % body length per
+/// cycle).
+fn locomotion_summary(
+    name: &str,
+    best: &Individual,
+    summary: &RunSummary,
+) -> (serde_json::Value, String) {
+    let m = best.outcome.locomotion_metrics();
+    let json = serde_json::json!({
+        "task": "locomotion",
+        "displacement_m": m.map(|m| m.displacement),
+        "speed_percent_body_length_per_cycle": m.map(|m| m.speed_percent_per_cycle),
+        "paper_speed_percent_body_length_per_cycle": 3.38,
+        "body_length_m": m.map(|m| m.body_length),
+        "voxels": m.map(|m| m.voxels),
+        "material_counts": m.map(|m| m.material_counts.clone()),
+        "centre_of_mass_trace": m.map(|m| m.centre_of_mass_trace.clone()),
+    });
+    let fmt = |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.3}{unit}"));
+    let md = format!(
+        "# Run `{name}`\n\n| task | displacement | speed (body lengths/cycle) | paper | voxels | evaluations | wall time | resolution | stop |\n|---|---|---|---|---|---|---|---|---|\n| locomotion | {} | {} | 3.38 % | {} | {} | {:.1} s | {} | {:?} |\n",
+        fmt(m.map(|m| 1e3 * m.displacement), " mm"),
+        fmt(m.map(|m| m.speed_percent_per_cycle), " %"),
+        m.map_or("-".to_string(), |m| m.voxels.to_string()),
+        summary.evaluations,
+        summary.wall_seconds,
+        summary.dims,
+        summary.stop,
+    );
+    (json, md)
 }
 
 /// A readable voxel file: for each Z layer (bottom up), one string per Y row with a character per

@@ -209,11 +209,7 @@ pub fn run(
 
         let best = best_of(&search.islands);
         writer.best_so_far(best, dims)?;
-        progress.epoch(
-            search.epoch,
-            best.outcome.beam_metrics().map(|m| m.rms_percent),
-            dims,
-        );
+        progress.epoch(search.epoch, best.outcome.headline(), dims);
 
         // A switch re-evaluates every population; with less budget left than that, the run ends at
         // the current level rather than overshoot its evaluation budget.

@@ -2,6 +2,7 @@
 
 use crate::beam::evaluate_beam;
 use crate::genome::Genome;
+use crate::locomotion::evaluate_locomotion;
 use crate::outcome::Outcome;
 use crate::scene::Scene;
 use crate::voxel::GridDims;
@@ -10,5 +11,6 @@ use crate::voxel::GridDims;
 pub fn evaluate(genome: &Genome, scene: &Scene, dims: GridDims) -> Outcome {
     match scene {
         Scene::Beam(beam) => evaluate_beam(genome, beam, dims),
+        Scene::Locomotion(scene) => evaluate_locomotion(genome, scene, dims),
     }
 }

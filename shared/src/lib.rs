@@ -7,6 +7,7 @@ pub mod beam;
 pub mod dynamics;
 pub mod evaluate;
 pub mod genome;
+pub mod locomotion;
 pub mod material;
 pub mod outcome;
 pub mod scene;

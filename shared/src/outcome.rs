@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::beam::BeamMetrics;
+use crate::locomotion::LocomotionMetrics;
 
 /// Why an evaluation produced no fitness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
@@ -32,6 +33,7 @@ pub enum Failure {
 #[serde(rename_all = "snake_case")]
 pub enum Metrics {
     Beam(BeamMetrics),
+    Locomotion(LocomotionMetrics),
 }
 
 /// What a worker returns for a task.
@@ -74,6 +76,36 @@ impl Outcome {
     /// Whether this outcome is strictly fitter than `other` (the crowding replacement rule).
     pub fn is_fitter_than(&self, other: &Outcome) -> bool {
         self.rank() > other.rank()
+    }
+
+    pub fn locomotion_metrics(&self) -> Option<&LocomotionMetrics> {
+        match self {
+            Self::Evaluated {
+                metrics: Metrics::Locomotion(m),
+                ..
+            } => Some(m),
+            _ => None,
+        }
+    }
+
+    /// The task's headline figure for progress lines and summaries: the beam's RMS error, or the
+    /// robot's speed.
+    pub fn headline(&self) -> Option<String> {
+        match self {
+            Self::Evaluated {
+                metrics: Metrics::Beam(m),
+                ..
+            } => Some(format!("RMS {:.3} %", m.rms_percent)),
+            Self::Evaluated {
+                metrics: Metrics::Locomotion(m),
+                ..
+            } => Some(format!(
+                "{:.2} mm, {:.2} % body length/cycle",
+                1e3 * m.displacement,
+                m.speed_percent_per_cycle
+            )),
+            Self::Failed { .. } => None,
+        }
     }
 
     pub fn beam_metrics(&self) -> Option<&BeamMetrics> {

@@ -56,12 +56,9 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     let summary = run(&config, &mut evaluator, &shutdown, &progress)
         .with_context(|| format!("run '{}' failed", config.raw.name))?;
     let best = summary.best();
-    let rms = best
-        .outcome
-        .beam_metrics()
-        .map_or("-".into(), |m| format!("{:.3} %", m.rms_percent));
+    let headline = best.outcome.headline().unwrap_or_else(|| "-".into());
     println!(
-        "{}: best RMS error {rms} at {} after {} evaluations in {:.1} s ({:?}); results in {}",
+        "{}: best {headline} at {} after {} evaluations in {:.1} s ({:?}); results in {}",
         config.raw.name,
         summary.dims,
         summary.evaluations,
