@@ -56,13 +56,16 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
         if q_rel.w < 0.0 {
             q_rel = q_rel.scaled(-1.0);
         }
-        // √q_rel = (q_rel + 1)/|q_rel + 1| for a unit quaternion with w ≥ 0.
+        // √q_rel = (q_rel + 1)/|q_rel + 1| for a unit quaternion with w ≥ 0, and
+        // |q_rel + 1|² = 2 + 2w: the frame is built from the unnormalised product with that
+        // norm folded into the matrix (no square root).
         let half = Quat {
             w: q_rel.w + 1.0,
             ..q_rel
-        }
-        .normalized();
-        let frame = qa.compose(half).to_matrix();
+        };
+        let frame = qa
+            .compose(half)
+            .to_matrix_with_scale(1.0 / (qa.norm2() * (1.0 + q_rel.w)));
         let r_world = position[ib] - position[ia];
         let d = frame.apply_transpose(r_world).to_axis(axis);
         let phi = q_rel.rotation_vector().to_axis(axis);

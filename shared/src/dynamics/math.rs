@@ -257,14 +257,23 @@ impl Quat {
     /// The rotation matrix of a unit quaternion.
     #[inline(always)]
     pub fn to_matrix(self) -> Mat3 {
+        self.to_matrix_with_scale(2.0)
+    }
+
+    /// The rotation matrix of `self / |self|` given `two_over_norm2` = 2/|self|²: a quaternion
+    /// known only up to scale costs one division here instead of a square root and a division
+    /// to normalise it first (the square root's latency dominated the link pass).
+    #[inline(always)]
+    pub fn to_matrix_with_scale(self, two_over_norm2: f64) -> Mat3 {
         let (w, x, y, z) = (self.w, self.x, self.y, self.z);
         let (xx, yy, zz) = (x * x, y * y, z * z);
         let (xy, xz, yz) = (x * y, x * z, y * z);
         let (wx, wy, wz) = (w * x, w * y, w * z);
+        let s = two_over_norm2;
         Mat3 {
-            cx: Vec3::new(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)),
-            cy: Vec3::new(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)),
-            cz: Vec3::new(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)),
+            cx: Vec3::new(1.0 - s * (yy + zz), s * (xy + wz), s * (xz - wy)),
+            cy: Vec3::new(s * (xy - wz), 1.0 - s * (xx + zz), s * (yz + wx)),
+            cz: Vec3::new(s * (xz + wy), s * (yz - wx), 1.0 - s * (xx + yy)),
         }
     }
 }
