@@ -6,6 +6,7 @@
 pub mod beam;
 pub mod dynamics;
 pub mod evaluate;
+pub mod export;
 pub mod genome;
 pub mod locomotion;
 pub mod material;
