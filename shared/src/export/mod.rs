@@ -1,11 +1,13 @@
 //! Fabrication exports of a design (paper §III-D and §IV-C): closed per-material surface meshes as
-//! binary STL for multi-material printing.
+//! binary STL for multi-material printing, and VXA for VoxCAD/Voxelyze.
 
 pub mod mesh;
 pub mod stl;
+pub mod vxa;
 
 pub use mesh::{TriangleMesh, boundary_mesh};
 pub use stl::{read_binary_stl, write_binary_stl};
+pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 
 use crate::material::MaterialId;
 use crate::voxel::VoxelGrid;

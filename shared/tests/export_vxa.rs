@@ -1,0 +1,81 @@
+//! VXA (VoxCAD/Voxelyze) export: a written design reads back identical, the scene's settings are
+//! in the file, and malformed files are refused with the element named.
+
+use amorph::dynamics::{DynamicScene, foam_palette};
+use amorph::export::{VxaDesign, read_vxa, write_vxa};
+use amorph::material::{MaterialId, Palette};
+use amorph::voxel::{GridDims, VoxelGrid};
+use proptest::prelude::*;
+
+fn design(cells: &[u8], dims: GridDims, palette: Palette) -> VxaDesign {
+    VxaDesign {
+        grid: VoxelGrid::from_cells(
+            dims,
+            cells
+                .iter()
+                .map(|&c| (c > 0).then(|| MaterialId(c - 1)))
+                .collect(),
+        ),
+        palette,
+        voxel_size: 1e-3,
+    }
+}
+
+proptest! {
+    /// Write then read gives the same grid, palette (every mechanical number bit for bit:
+    /// Rust prints the shortest decimal that parses back to the same f64) and voxel size.
+    #[test]
+    fn vxa_round_trips_grid_palette_and_lattice(
+        cells in prop::collection::vec(0u8..3, 3 * 4 * 5),
+        size in 1e-5f64..1.0,
+    ) {
+        let mut d = design(&cells, GridDims::new(3, 4, 5), foam_palette());
+        d.voxel_size = size;
+        let text = write_vxa(&d, Some(&DynamicScene::paper_locomotion()));
+        let back = read_vxa(&text).unwrap();
+        prop_assert_eq!(back, d);
+    }
+}
+
+#[test]
+fn the_scene_settings_are_written_for_voxelyze() {
+    let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
+    let scene = DynamicScene::paper_locomotion();
+    let text = write_vxa(&d, Some(&scene));
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let value = |name: &str| -> f64 {
+        doc.descendants()
+            .find(|n| n.has_tag_name(name))
+            .unwrap_or_else(|| panic!("<{name}> missing"))
+            .text()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(value("GravAcc"), -9.81);
+    assert_eq!(value("FloorEnabled"), 1.0);
+    assert_eq!(value("TempPeriod"), 0.07);
+    // ±20 % volume is a linear expansion of 1.2^(1/3) − 1 per unit of the ±1 temperature swing,
+    // on the actuated foam only.
+    let ctes: Vec<f64> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("CTE"))
+        .map(|n| n.text().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(ctes, vec![0.0, 1.2f64.cbrt() - 1.0]);
+    assert!((value("StopConditionValue") - (0.5 + 10.0 * 0.07)).abs() < 1e-12);
+}
+
+#[test]
+fn a_truncated_layer_is_refused_naming_the_layer() {
+    let d = design(
+        &[1, 0, 2, 1],
+        GridDims::new(2, 2, 1),
+        Palette::hard_soft_resins(),
+    );
+    let text = write_vxa(&d, None).replace("<![CDATA[1021]]>", "<![CDATA[102]]>");
+    let err = read_vxa(&text).unwrap_err().to_string();
+    assert!(err.contains("layer 0") && err.contains("3 voxels"), "{err}");
+    let err = read_vxa("<VXA><VXC></VXC></VXA>").unwrap_err().to_string();
+    assert!(err.contains("Lattice_Dim"), "{err}");
+}
