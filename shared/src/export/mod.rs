@@ -1,10 +1,12 @@
 //! Fabrication exports of a design (paper §III-D and §IV-C): closed per-material surface meshes as
-//! binary STL for multi-material printing, and VXA for VoxCAD/Voxelyze.
+//! binary STL for multi-material printing, VXA for VoxCAD/Voxelyze, and SVG laser-cut layers.
 
+pub mod layers;
 pub mod mesh;
 pub mod stl;
 pub mod vxa;
 
+pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
