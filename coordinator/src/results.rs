@@ -148,6 +148,7 @@ impl ResultWriter {
             &self.dir.join("best_voxels.json"),
             &voxels_json(&grid, scene),
         )?;
+        amorph::export::write_fabrication_files(&self.dir.join("exports"), &grid, scene)?;
         let common = serde_json::json!({
             "name": self.config.raw.name,
             "stop": summary.stop,

@@ -42,6 +42,14 @@ impl Scene {
         }
     }
 
+    /// Edge length of one voxel at resolution `dims`, m.
+    pub fn voxel_size(&self, dims: GridDims) -> f64 {
+        match self {
+            Scene::Beam(b) => b.length / dims.ny as f64,
+            Scene::Locomotion(l) => l.dynamics_at(dims).voxel_size,
+        }
+    }
+
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         match self {

@@ -45,6 +45,8 @@ fn a_run_stops_at_its_evaluation_budget_and_writes_its_results() {
         "best_voxels.json",
         "summary.json",
         "summary.md",
+        "exports/design.vxa",
+        "exports/layers/layer-001.svg",
     ] {
         assert!(run_dir.join(file).is_file(), "missing {file}");
     }

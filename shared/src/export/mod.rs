@@ -28,3 +28,67 @@ pub fn material_meshes_mm(
         })
         .collect()
 }
+
+/// Writes every fabrication file of a design into `dir`: `material-<i>-<name>.stl` per material
+/// present, `design.vxa` (with the scene's dynamics settings for a robot) and
+/// `layers/layer-<z>.svg` per voxel layer. Returns the files written, relative to `dir`.
+pub fn write_fabrication_files(
+    dir: &std::path::Path,
+    grid: &VoxelGrid,
+    scene: &crate::scene::Scene,
+) -> std::io::Result<Vec<std::path::PathBuf>> {
+    use std::path::PathBuf;
+    let palette = scene.palette();
+    let voxel_size = scene.voxel_size(grid.dims());
+    std::fs::create_dir_all(dir.join("layers"))?;
+    let mut written = Vec::new();
+    let counts = grid.material_counts(palette.len());
+    for (m, mesh) in material_meshes_mm(grid, palette.len(), voxel_size)
+        .iter()
+        .enumerate()
+    {
+        if counts[m] == 0 {
+            continue;
+        }
+        let name = PathBuf::from(format!(
+            "material-{m}-{}.stl",
+            file_safe(&palette.0[m].name)
+        ));
+        let mut file = std::io::BufWriter::new(std::fs::File::create(dir.join(&name))?);
+        write_binary_stl(mesh, &format!("amorph material {m}"), &mut file)?;
+        std::io::Write::flush(&mut file)?;
+        written.push(name);
+    }
+    let dynamics = match scene {
+        crate::scene::Scene::Locomotion(l) => Some(l.dynamics_at(grid.dims())),
+        crate::scene::Scene::Beam(_) => None,
+    };
+    let vxa = write_vxa(
+        &VxaDesign {
+            grid: grid.clone(),
+            palette: palette.clone(),
+            voxel_size,
+        },
+        dynamics.as_ref(),
+    );
+    std::fs::write(dir.join("design.vxa"), vxa)?;
+    written.push(PathBuf::from("design.vxa"));
+    for z in 0..grid.dims().nz {
+        let name = PathBuf::from(format!("layers/layer-{:03}.svg", z + 1));
+        std::fs::write(dir.join(&name), layer_svg(grid, palette, voxel_size, z))?;
+        written.push(name);
+    }
+    Ok(written)
+}
+
+fn file_safe(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
