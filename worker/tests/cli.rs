@@ -51,7 +51,7 @@ fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
     }
     // Binary STL size is 84 + 50 bytes per triangle, and a beam of material 0 is present.
     let stl = std::fs::read(out.join("material-0-hard-resin.stl")).unwrap();
-    assert!(stl.len() > 84 && (stl.len() - 84) % 50 == 0);
+    assert!(stl.len() > 84 && (stl.len() - 84).is_multiple_of(50));
 }
 
 #[test]
