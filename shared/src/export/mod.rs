@@ -1,14 +1,16 @@
 //! Fabrication exports of a design (paper §III-D and §IV-C): closed per-material surface meshes as
-//! binary STL for multi-material printing, VXA for VoxCAD/Voxelyze, and SVG laser-cut layers.
+//! binary STL and a multi-material 3MF for printing, VXA for VoxCAD/Voxelyze, and SVG laser-cut layers.
 
 pub mod layers;
 pub mod mesh;
 pub mod stl;
+pub mod threemf;
 pub mod vxa;
 
 pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
 pub use stl::{read_binary_stl, write_binary_stl};
+pub use threemf::write_3mf;
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 
 use crate::material::MaterialId;
@@ -30,7 +32,8 @@ pub fn material_meshes_mm(
 }
 
 /// Writes every fabrication file of a design into `dir`: `material-<i>-<name>.stl` per material
-/// present, `design.vxa` (with the scene's dynamics settings for a robot) and
+/// present, `design.3mf` (all materials), `design.vxa` (with the scene's dynamics settings for a
+/// robot) and
 /// `layers/layer-<z>.svg` per voxel layer. Returns the files written, relative to `dir`.
 pub fn write_fabrication_files(
     dir: &std::path::Path,
@@ -73,6 +76,9 @@ pub fn write_fabrication_files(
     );
     std::fs::write(dir.join("design.vxa"), vxa)?;
     written.push(PathBuf::from("design.vxa"));
+    let package = write_3mf(grid, palette, voxel_size).map_err(std::io::Error::other)?;
+    std::fs::write(dir.join("design.3mf"), package)?;
+    written.push(PathBuf::from("design.3mf"));
     for z in 0..grid.dims().nz {
         let name = PathBuf::from(format!("layers/layer-{:03}.svg", z + 1));
         std::fs::write(dir.join(&name), layer_svg(grid, palette, voxel_size, z))?;

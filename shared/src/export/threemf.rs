@@ -1,0 +1,97 @@
+//! 3MF (3D Manufacturing Format, core specification with base materials): one mesh object per
+//! material, each pointing at its base material, in millimetres, so a multi-material slicer assigns
+//! one extruder or print head per material. The package is an OPC zip with stored (uncompressed)
+//! parts, which the format allows and keeps the dependency small.
+
+use std::fmt::Write as _;
+use std::io::{Cursor, Write};
+
+use super::material_meshes_mm;
+use crate::material::Palette;
+use crate::voxel::VoxelGrid;
+
+const CONTENT_TYPES: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types"><Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/><Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/></Types>
+"#;
+
+const RELATIONSHIPS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships"><Relationship Target="/3D/3dmodel.model" Id="rel0" Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>
+"#;
+
+/// The model part: base materials (id 1, one per palette entry) and one object per material
+/// with voxels.
+pub fn model_xml(grid: &VoxelGrid, palette: &Palette, voxel_size: f64) -> String {
+    let mut x = String::new();
+    let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
+    let _ = writeln!(
+        x,
+        r#"<model unit="millimeter" xml:lang="en-US" xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02"><resources>"#
+    );
+    let _ = write!(x, r#"<basematerials id="1">"#);
+    for (_, m) in palette.iter() {
+        let [r, g, b] = m.colour;
+        let _ = write!(
+            x,
+            r##"<base name="{}" displaycolor="#{r:02X}{g:02X}{b:02X}FF"/>"##,
+            m.name
+                .replace('&', "&amp;")
+                .replace('"', "&quot;")
+                .replace('<', "&lt;")
+        );
+    }
+    let _ = writeln!(x, "</basematerials>");
+    let counts = grid.material_counts(palette.len());
+    let mut objects = Vec::new();
+    for (m, mesh) in material_meshes_mm(grid, palette.len(), voxel_size)
+        .iter()
+        .enumerate()
+    {
+        if counts[m] == 0 {
+            continue;
+        }
+        let id = m + 2;
+        objects.push(id);
+        let _ = write!(
+            x,
+            r#"<object id="{id}" type="model" pid="1" pindex="{m}"><mesh><vertices>"#
+        );
+        for v in &mesh.vertices {
+            let _ = write!(x, r#"<vertex x="{}" y="{}" z="{}"/>"#, v[0], v[1], v[2]);
+        }
+        let _ = write!(x, "</vertices><triangles>");
+        for t in &mesh.triangles {
+            let _ = write!(
+                x,
+                r#"<triangle v1="{}" v2="{}" v3="{}"/>"#,
+                t[0], t[1], t[2]
+            );
+        }
+        let _ = writeln!(x, "</triangles></mesh></object>");
+    }
+    let _ = write!(x, "</resources><build>");
+    for id in objects {
+        let _ = write!(x, r#"<item objectid="{id}"/>"#);
+    }
+    let _ = writeln!(x, "</build></model>");
+    x
+}
+
+/// The whole .3mf package as bytes.
+pub fn write_3mf(
+    grid: &VoxelGrid,
+    palette: &Palette,
+    voxel_size: f64,
+) -> zip::result::ZipResult<Vec<u8>> {
+    let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
+    let options =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    for (name, content) in [
+        ("[Content_Types].xml", CONTENT_TYPES.to_string()),
+        ("_rels/.rels", RELATIONSHIPS.to_string()),
+        ("3D/3dmodel.model", model_xml(grid, palette, voxel_size)),
+    ] {
+        zip.start_file(name, options)?;
+        zip.write_all(content.as_bytes())?;
+    }
+    Ok(zip.finish()?.into_inner())
+}
