@@ -3,12 +3,14 @@
 
 pub mod layers;
 pub mod mesh;
+pub mod render;
 pub mod stl;
 pub mod threemf;
 pub mod vxa;
 
 pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
+pub use render::{Image, render_isometric};
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use threemf::write_3mf;
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
@@ -79,6 +81,11 @@ pub fn write_fabrication_files(
     let package = write_3mf(grid, palette, voxel_size).map_err(std::io::Error::other)?;
     std::fs::write(dir.join("design.3mf"), package)?;
     written.push(PathBuf::from("design.3mf"));
+    let picture = render_isometric(grid, palette, 12.0)
+        .to_png()
+        .map_err(std::io::Error::other)?;
+    std::fs::write(dir.join("design.png"), picture)?;
+    written.push(PathBuf::from("design.png"));
     for z in 0..grid.dims().nz {
         let name = PathBuf::from(format!("layers/layer-{:03}.svg", z + 1));
         std::fs::write(dir.join(&name), layer_svg(grid, palette, voxel_size, z))?;
