@@ -209,6 +209,18 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
         return Err("budget.target_rms_percent applies to beam scenes only".into());
     }
     raw.resolution.validate()?;
+    if matches!(raw.scene, amorph::scene::Scene::Beam(_)) {
+        // The beam runs along y (clamped at y = 0, loaded at the last y layer, deflecting in −z):
+        // [12, 12, 40] would be a 12-voxel-long beam 40 voxels deep, almost surely a slip for the
+        // paper's [12, 40, 12].
+        for (i, &[nx, ny, nz]) in raw.resolution.levels.iter().enumerate() {
+            if ny < nx || ny < nz {
+                return Err(format!(
+                    "resolution.levels[{i}] = [{nx}, {ny}, {nz}]: a beam runs along y, so ny must be its longest count (did you mean [{nx}, {nz}, {ny}]?)"
+                ));
+            }
+        }
+    }
     raw.scene.validate().map_err(|e| format!("scene: {e}"))?;
     Ok(())
 }
@@ -222,7 +234,7 @@ name = "t"
 [budget]
 evaluations = 100
 [resolution]
-levels = [[6, 6, 20]]
+levels = [[6, 20, 6]]
 [scene]
 kind = "beam"
 target = "straight"

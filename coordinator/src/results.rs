@@ -149,6 +149,7 @@ impl ResultWriter {
             &voxels_json(&grid, scene),
         )?;
         amorph::export::write_fabrication_files(&self.dir.join("exports"), &grid, scene)?;
+        self.plots(summary, best)?;
         let common = serde_json::json!({
             "name": self.config.raw.name,
             "stop": summary.stop,
@@ -168,6 +169,95 @@ impl ResultWriter {
         }
         write_json(&self.dir.join("summary.json"), &json)?;
         std::fs::write(self.dir.join("summary.md"), md)
+    }
+
+    /// progress.png (the best of each island against evaluations and against wall time) and, for
+    /// a beam, profile.png (the deflected top surface against its target).
+    fn plots(&self, summary: &RunSummary, best: &Individual) -> std::io::Result<()> {
+        use amorph::export::{PlotSpec, Series, line_plot};
+        let beam = best.outcome.beam_metrics().is_some();
+        let islands = summary.populations.len();
+        let palette = [
+            [31, 119, 180],
+            [214, 39, 40],
+            [44, 160, 44],
+            [148, 103, 189],
+            [255, 127, 14],
+            [23, 190, 207],
+        ];
+        let figure = |x_of: &dyn Fn(&crate::run::HistoryRow) -> f64, x_label: &str| {
+            let series: Vec<Series> = (0..islands)
+                .map(|i| Series {
+                    label: format!("island {i}"),
+                    colour: palette[i % palette.len()],
+                    markers: false,
+                    points: summary
+                        .history
+                        .iter()
+                        .filter(|r| r.island as usize == i)
+                        .filter_map(|r| {
+                            let y = if beam {
+                                r.best_rms_percent?
+                            } else {
+                                1e3 * r.best_fitness?
+                            };
+                            Some([x_of(r), y])
+                        })
+                        .collect(),
+                })
+                .collect();
+            let spec = PlotSpec {
+                title: format!("{}: best design per island", self.config.raw.name),
+                x_label: x_label.into(),
+                y_label: if beam {
+                    "RMS ERROR (% OF TIP DEFLECTION)".into()
+                } else {
+                    "DISPLACEMENT (MM)".into()
+                },
+                log_x: false,
+                log_y: beam,
+            };
+            line_plot(&spec, &series)
+                .to_png()
+                .map_err(std::io::Error::other)
+        };
+        std::fs::write(
+            self.dir.join("progress_evaluations.png"),
+            figure(&|r| r.evaluations as f64, "EVALUATIONS")?,
+        )?;
+        std::fs::write(
+            self.dir.join("progress_wall_time.png"),
+            figure(&|r| r.wall_seconds, "WALL TIME (S)")?,
+        )?;
+        if let Some(m) = best.outcome.beam_metrics() {
+            let pick = |k: usize| m.profile.iter().map(|p| [p[0], p[k]]).collect();
+            let series = [
+                Series {
+                    label: "TARGET".into(),
+                    colour: [120, 120, 120],
+                    markers: false,
+                    points: pick(2),
+                },
+                Series {
+                    label: "SIMULATED".into(),
+                    colour: [214, 39, 40],
+                    markers: true,
+                    points: pick(1),
+                },
+            ];
+            let spec = PlotSpec {
+                title: format!("TOP SURFACE, RMS {:.3} %", m.rms_percent),
+                x_label: "POSITION ALONG THE BEAM (CLAMP 0, TIP 1)".into(),
+                y_label: "DEFLECTION / TIP DEFLECTION".into(),
+                log_x: false,
+                log_y: false,
+            };
+            let png = line_plot(&spec, &series)
+                .to_png()
+                .map_err(std::io::Error::other)?;
+            std::fs::write(self.dir.join("profile.png"), png)?;
+        }
+        Ok(())
     }
 
     /// The beam's profile.csv, and its summary fields and Table-III-style line.

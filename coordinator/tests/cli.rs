@@ -28,7 +28,7 @@ children_per_epoch = 3
 [budget]
 evaluations = 10
 [resolution]
-levels = [[4, 4, 12]]
+levels = [[4, 12, 4]]
 [scene]
 kind = "beam"
 target = "straight"
@@ -71,4 +71,19 @@ fn a_small_run_completes_and_reports_its_results_folder() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("after 10 evaluations"), "{stdout}");
     assert!(dir.join("cli").join("summary.md").is_file());
+}
+
+#[test]
+fn a_beam_resolution_lying_on_its_side_is_refused_with_the_fix() {
+    let path = write_config(
+        "sideways.toml",
+        &GOOD.replace("levels = [[4, 12, 4]]", "levels = [[4, 4, 12]]"),
+    );
+    let (ok, stderr) = coordinator(&["--config", path.to_str().unwrap()]);
+    assert!(!ok);
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("resolution.levels[0]") && stderr.contains("[4, 12, 4]"),
+        "{stderr}"
+    );
 }

@@ -83,25 +83,25 @@ fn statics(c: &mut Criterion) {
     let jacobi = ("block_jacobi", StaticSolverParams::block_jacobi_pcg());
 
     let grid = two_material(GridDims::new(12, 40, 12), 7);
-    c.bench_function("static_model_build_12x12x40", |b| {
+    c.bench_function("static_model_build_12x40x12", |b| {
         b.iter(|| StaticModel::new(black_box(&grid), &Palette::hard_soft_resins(), 1e-3).unwrap())
     });
 
     bench_case(
         c,
-        "static_solve_6x6x20",
+        "static_solve_6x20x6",
         &two_material(GridDims::new(6, 20, 6), 7),
         &[direct.clone(), multigrid.clone(), jacobi.clone()],
     );
     bench_case(
         c,
-        "static_solve_12x12x40_homogeneous",
+        "static_solve_12x40x12_homogeneous",
         &homogeneous(GridDims::new(12, 40, 12)),
         &[direct.clone(), multigrid.clone()],
     );
     bench_case(
         c,
-        "static_solve_12x12x40_two_material",
+        "static_solve_12x40x12_two_material",
         &two_material(GridDims::new(12, 40, 12), 7),
         &[direct.clone(), multigrid.clone(), jacobi],
     );

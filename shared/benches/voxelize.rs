@@ -10,8 +10,8 @@ fn voxelize_100_points(c: &mut Criterion) {
     let mut rng = ChaCha8Rng::seed_from_u64(100);
     let genome = random_genome(&mut rng, 100, &GenomeLimits::default(), 2);
     for (name, dims) in [
-        ("voxelize_100_points_12x12x40", GridDims::new(12, 12, 40)),
-        ("voxelize_100_points_64x64x200", GridDims::new(64, 64, 200)),
+        ("voxelize_100_points_12x40x12", GridDims::new(12, 40, 12)),
+        ("voxelize_100_points_64x200x64", GridDims::new(64, 200, 64)),
     ] {
         c.bench_function(name, |b| b.iter(|| voxelize(&genome, dims, 2, 0.5)));
     }

@@ -18,7 +18,7 @@ pub fn scratch_dir(test: &str) -> PathBuf {
     dir
 }
 
-/// A small beam run at 6x6x20 (then 8x8x26 when it stalls), written to `results_dir`.
+/// A small beam run at 4x12x4 (then 6x20x6 when it stalls), written to `results_dir`.
 pub fn small_beam_config(results_dir: &Path, evaluations: u64, seed: u64) -> RunConfig {
     let text = format!(
         r#"
@@ -35,7 +35,7 @@ interval = 2
 [budget]
 evaluations = {evaluations}
 [resolution]
-levels = [[4, 4, 12], [6, 6, 20]]
+levels = [[4, 12, 4], [6, 20, 6]]
 stall_epochs = 3
 [scene]
 kind = "beam"

@@ -58,7 +58,7 @@ fn a_run_stops_at_its_evaluation_budget_and_writes_its_results() {
         .lines()
         .skip(1)
         .filter(|l| l.split(',').nth(4) == Some("0"))
-        .filter(|l| l.split(',').nth(3) == Some("4x4x12"))
+        .filter(|l| l.split(',').nth(3) == Some("4x12x4"))
         .filter_map(|l| l.split(',').nth(5)?.parse().ok())
         .collect();
     assert!(best.windows(2).all(|w| w[1] >= w[0]), "{best:?}");

@@ -15,9 +15,13 @@ fn worker(args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// A chain of blobs along the beam (y) from the clamp to the tip, two materials.
 const GENOME: &str = r#"{"points": [
-  {"position": [0.5, 0.5, 0.5], "density": 1.0, "falloff": 0.3, "material": 0},
-  {"position": [0.5, 0.9, 0.5], "density": 0.8, "falloff": 0.1, "material": 1}
+  {"position": [0.5, 0.05, 0.5], "density": 1.0, "falloff": 0.12, "material": 0},
+  {"position": [0.5, 0.3, 0.5], "density": 1.0, "falloff": 0.12, "material": 1},
+  {"position": [0.5, 0.55, 0.5], "density": 1.0, "falloff": 0.12, "material": 0},
+  {"position": [0.5, 0.8, 0.5], "density": 1.0, "falloff": 0.12, "material": 1},
+  {"position": [0.5, 0.98, 0.5], "density": 1.0, "falloff": 0.3, "material": 0}
 ]}"#;
 
 const SCENE: &str = "kind = \"beam\"\ntarget = \"circular_arc\"\n";
@@ -37,7 +41,7 @@ fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
         "--scene",
         dir.join("scene.toml").to_str().unwrap(),
         "--resolution",
-        "6x6x20",
+        "6x20x6",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -45,20 +49,39 @@ fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
     assert!(stdout.contains("wrote"), "{stdout}");
     let design = std::fs::read_to_string(out.join("design.vxa")).unwrap();
     let back = amorph::export::read_vxa(&design).unwrap();
-    assert_eq!(back.grid.dims().nz, 20);
-    for z in 1..=20 {
+    assert_eq!(back.grid.dims(), amorph::voxel::GridDims::new(6, 20, 6));
+    for z in 1..=6 {
         assert!(out.join(format!("layers/layer-{z:03}.svg")).is_file());
     }
-    // Binary STL size is 84 + 50 bytes per triangle, and a beam of material 0 is present.
-    let stl = std::fs::read(out.join("material-0-hard-resin.stl")).unwrap();
-    assert!(stl.len() > 84 && (stl.len() - 84).is_multiple_of(50));
+    // One binary STL per material present: 84 + 50 bytes per triangle.
+    let stls: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "stl"))
+        .collect();
+    let present = back
+        .grid
+        .material_counts(2)
+        .iter()
+        .filter(|&&c| c > 0)
+        .count();
+    assert!(present > 0);
+    assert_eq!(stls.len(), present);
+    for stl in stls {
+        let bytes = std::fs::read(stl).unwrap();
+        assert!(bytes.len() > 84 && (bytes.len() - 84).is_multiple_of(50));
+    }
 }
 
 #[test]
 fn an_out_of_range_genome_is_refused_naming_the_point_and_field() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("worker-nan");
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("genome.json"), GENOME.replace("0.3", "5.0")).unwrap();
+    std::fs::write(
+        dir.join("genome.json"),
+        GENOME.replace(r#""falloff": 0.3"#, r#""falloff": 5.0"#),
+    )
+    .unwrap();
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     let (ok, _, stderr) = worker(&[
         "export",
@@ -67,13 +90,13 @@ fn an_out_of_range_genome_is_refused_naming_the_point_and_field() {
         "--scene",
         dir.join("scene.toml").to_str().unwrap(),
         "--resolution",
-        "6x6x20",
+        "6x20x6",
         "--out",
         dir.join("out").to_str().unwrap(),
     ]);
     assert!(!ok);
     assert!(
-        stderr.contains("falloff") && stderr.contains("point 0"),
+        stderr.contains("falloff") && stderr.contains("point 4"),
         "{stderr}"
     );
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");

@@ -3,6 +3,7 @@
 
 pub mod layers;
 pub mod mesh;
+pub mod plot;
 pub mod render;
 pub mod stl;
 pub mod threemf;
@@ -10,6 +11,7 @@ pub mod vxa;
 
 pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
+pub use plot::{PlotSpec, Series, line_plot};
 pub use render::{Image, render_isometric};
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use threemf::write_3mf;

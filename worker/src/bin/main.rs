@@ -23,7 +23,7 @@ enum Command {
         /// A run config (its [scene] is used) or a bare scene TOML.
         #[arg(long)]
         scene: PathBuf,
-        /// Resolution as NXxNYxNZ, e.g. 12x12x40.
+        /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
         #[arg(long)]
         resolution: String,
     },
@@ -35,7 +35,7 @@ enum Command {
         /// A run config (its [scene] is used) or a bare scene TOML.
         #[arg(long)]
         scene: PathBuf,
-        /// Resolution as NXxNYxNZ, e.g. 12x12x40.
+        /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
         #[arg(long)]
         resolution: String,
         /// Folder to write into (created if missing).
