@@ -4,6 +4,8 @@
 //! table on a 10³ block and the N = 10 and N = 20 blocks of the issue (voxel-steps/s as
 //! throughput). Extra modes, selected by a free argument after `--`:
 //! - `eval`: one paper-style locomotion evaluation of a random 20³-workspace robot, timed;
+//! - `min`: the per-pass table and the blocks as the *minimum* time per step over many short
+//!   repetitions, robust to a machine shared with other jobs (use it for before/after tables);
 //! - `study`: the error-against-run-time study: CSV and an SVG plot under
 //!   `$CARGO_TARGET_DIR/dynamics-study/` (or `target/dynamics-study/`).
 
@@ -104,6 +106,51 @@ fn bench_passes(c: &mut Criterion) {
     group.finish();
 }
 
+/// Minimum wall time per step of `sim` over 40 repetitions of `steps` steps, µs.
+fn min_step_time(sim: &mut Simulation, steps: usize) -> f64 {
+    let mut best = f64::INFINITY;
+    for _ in 0..40 {
+        let start = Instant::now();
+        for _ in 0..steps {
+            black_box(sim.step()).ok();
+        }
+        best = best.min(start.elapsed().as_secs_f64() / steps as f64);
+    }
+    best * 1e6
+}
+
+/// The `min` mode: per-pass cost on the 10³ block and the N = 10 and N = 20 blocks.
+fn min_table() {
+    let full = speed_block(10);
+    let links = |damped, actuated| Pass::Links { damped, actuated };
+    let cases: Vec<(&str, Vec<Pass>)> = vec![
+        ("all_passes", full.passes().to_vec()),
+        ("integrate_only", vec![Pass::Integrate]),
+        ("links_plain", vec![links(false, false), Pass::Integrate]),
+        ("links_damped", vec![links(true, false), Pass::Integrate]),
+        (
+            "links_damped_actuated",
+            vec![links(true, true), Pass::Integrate],
+        ),
+        ("gravity", vec![Pass::Gravity, Pass::Integrate]),
+        ("floor_friction", vec![Pass::Floor, Pass::Integrate]),
+    ];
+    for (name, passes) in cases {
+        let mut sim = full.clone();
+        sim.set_passes(passes);
+        println!("{name:<24} {:9.1} µs", min_step_time(&mut sim, 50));
+    }
+    for n in [10, 20] {
+        let mut sim = speed_block(n);
+        let t = min_step_time(&mut sim, if n == 10 { 50 } else { 10 });
+        println!(
+            "block_{n}{:<17} {t:9.1} µs  {:.2e} voxel-steps/s",
+            "",
+            (n * n * n) as f64 / (t * 1e-6)
+        );
+    }
+}
+
 fn speed_block_with_collisions() -> Simulation {
     let grid = VoxelGrid::filled(GridDims::new(10, 10, 10), MaterialId(0));
     let scene = DynamicScene {
@@ -156,6 +203,10 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.iter().any(|a| a == "study") {
         study();
+        return;
+    }
+    if args.iter().any(|a| a == "min") {
+        min_table();
         return;
     }
     if args.iter().any(|a| a == "eval") {
