@@ -6,7 +6,7 @@
 //! - `eval`: one paper-style locomotion evaluation of a random 20³-workspace robot, timed;
 //! - `min`: the per-pass table and the blocks as the *minimum* time per step over many short
 //!   repetitions, robust to a machine shared with other jobs (use it for before/after tables);
-//! - `study`: the error-against-run-time study: CSV and an SVG plot under
+//! - `study`: the error-against-run-time study: CSV and a PNG plot under
 //!   `$CARGO_TARGET_DIR/dynamics-study/` (or `target/dynamics-study/`).
 
 use std::hint::black_box;
@@ -359,101 +359,46 @@ fn study() {
         ));
     }
     std::fs::write(dir.join("error_vs_time.csv"), csv).unwrap();
-    std::fs::write(dir.join("error_vs_time.svg"), svg_plot(&points)).unwrap();
+    std::fs::write(dir.join("error_vs_time.png"), study_png(&points)).unwrap();
     println!("wrote {}", dir.display());
 }
 
-/// A log–log scatter of relative error against wall time, one colour per case and resolution,
-/// hand-written SVG (no plotting dependency; convert to PNG with any SVG tool).
-fn svg_plot(points: &[StudyPoint]) -> String {
-    let (w, h, m) = (640.0, 440.0, 60.0);
-    let usable: Vec<&StudyPoint> = points
-        .iter()
-        .filter(|p| p.error.is_finite() && p.error > 0.0 && p.wall > 0.0)
-        .collect();
-    let lx = |t: f64| t.log10();
-    let (tmin, tmax) = usable
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(lx(p.wall)), b.max(lx(p.wall)))
-        });
-    let (emin, emax) = usable
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(lx(p.error)), b.max(lx(p.error)))
-        });
-    let (tmin, tmax) = (tmin.floor(), tmax.ceil().max(tmin.floor() + 1.0));
-    let (emin, emax) = (emin.floor(), emax.ceil().max(emin.floor() + 1.0));
-    let px = |t: f64| m + (lx(t) - tmin) / (tmax - tmin) * (w - 2.0 * m);
-    let py = |e: f64| h - m - (lx(e) - emin) / (emax - emin) * (h - 2.0 * m);
-    let mut svg = format!(
-        "<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}'>\
-         <rect width='100%' height='100%' fill='white'/>\
-         <line x1='{m}' y1='{}' x2='{}' y2='{}' stroke='black'/>\
-         <line x1='{m}' y1='{m}' x2='{m}' y2='{}' stroke='black'/>",
-        h - m,
-        w - m,
-        h - m,
-        h - m
-    );
-    for d in tmin as i32..=tmax as i32 {
-        let x = px(10f64.powi(d));
-        svg.push_str(&format!(
-            "<text x='{x}' y='{}' font-size='12' text-anchor='middle'>1e{d} s</text>",
-            h - m + 18.0
-        ));
-    }
-    for d in emin as i32..=emax as i32 {
-        let y = py(10f64.powi(d));
-        svg.push_str(&format!(
-            "<text x='{}' y='{y}' font-size='12' text-anchor='end'>1e{d}</text>\
-             <line x1='{m}' y1='{y}' x2='{}' y2='{y}' stroke='#ddd'/>",
-            m - 4.0,
-            w - m
-        ));
-    }
+/// A log–log plot of relative error against wall time, one line per case and resolution (points
+/// along a line are the time-step fractions), as PNG through the library's own plotter.
+fn study_png(points: &[StudyPoint]) -> Vec<u8> {
+    use amorph::export::{PlotSpec, Series, line_plot};
     let colours = [
-        ("cantilever", 1, "#1f77b4"),
-        ("cantilever", 2, "#17becf"),
-        ("locomotion", 10, "#d62728"),
-        ("locomotion", 20, "#ff7f0e"),
+        [31, 119, 180],
+        [214, 39, 40],
+        [44, 160, 44],
+        [148, 103, 189],
     ];
-    for (k, (case, r, colour)) in colours.iter().enumerate() {
-        let series: Vec<&&StudyPoint> = usable
-            .iter()
-            .filter(|p| p.case == *case && p.resolution == *r)
-            .collect();
-        let path: Vec<String> = series
-            .iter()
-            .map(|p| format!("{:.1},{:.1}", px(p.wall), py(p.error)))
-            .collect();
-        if path.len() > 1 {
-            svg.push_str(&format!(
-                "<polyline points='{}' fill='none' stroke='{colour}'/>",
-                path.join(" ")
-            ));
-        }
-        for p in &series {
-            svg.push_str(&format!(
-                "<circle cx='{:.1}' cy='{:.1}' r='4' fill='{colour}'><title>f={}</title></circle>",
-                px(p.wall),
-                py(p.error),
-                p.dt_fraction
-            ));
-        }
-        svg.push_str(&format!(
-            "<text x='{}' y='{}' font-size='12' fill='{colour}'>{case} r={r}</text>",
-            w - m - 150.0,
-            m + 16.0 * k as f64
-        ));
-    }
-    svg.push_str(&format!(
-        "<text x='{}' y='{}' font-size='13' text-anchor='middle'>wall time (s)</text>\
-         <text x='14' y='{}' font-size='13' transform='rotate(-90 14 {})' text-anchor='middle'>relative error</text></svg>",
-        w / 2.0,
-        h - 12.0,
-        h / 2.0,
-        h / 2.0
-    ));
-    svg
+    let mut keys: Vec<(&str, usize)> = points.iter().map(|p| (p.case, p.resolution)).collect();
+    keys.dedup();
+    let series: Vec<Series> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, &(case, r))| {
+            let mut pts: Vec<[f64; 2]> = points
+                .iter()
+                .filter(|p| p.case == case && p.resolution == r)
+                .map(|p| [p.wall, p.error])
+                .collect();
+            pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            Series {
+                label: format!("{case} r={r}"),
+                colour: colours[i % colours.len()],
+                markers: true,
+                points: pts,
+            }
+        })
+        .collect();
+    let spec = PlotSpec {
+        title: "ERROR AGAINST RUN TIME (DT FRACTION 0.25 TO 2)".into(),
+        x_label: "WALL TIME (S), ONE THREAD".into(),
+        y_label: "RELATIVE ERROR".into(),
+        log_x: true,
+        log_y: true,
+    };
+    line_plot(&spec, &series).to_png().expect("PNG encoding")
 }
