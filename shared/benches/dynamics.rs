@@ -313,7 +313,8 @@ fn locomotion_run(r: usize, dt_fraction: f64) -> StudyPoint {
 
 fn study() {
     let dir = std::path::PathBuf::from(
-        std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| "target".into()),
+        std::env::var("CARGO_TARGET_DIR")
+            .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../target").into()),
     )
     .join("dynamics-study");
     std::fs::create_dir_all(&dir).unwrap();
