@@ -1,6 +1,6 @@
 //! The `worker` binary's offline commands as a user runs them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn worker(args: &[&str]) -> (bool, String, String) {
@@ -26,12 +26,13 @@ const GENOME: &str = r#"{"points": [
 
 const SCENE: &str = "kind = \"beam\"\ntarget = \"circular_arc\"\n";
 
-#[test]
-fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("worker-export");
+/// `worker export` of `genome` in the beam scene at 6x20x6, in a fresh folder named `test`;
+/// returns success, stdout, stderr and the output folder.
+fn export(test: &str, genome: &str) -> (bool, String, String, PathBuf) {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(test);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("genome.json"), GENOME).unwrap();
+    std::fs::write(dir.join("genome.json"), genome).unwrap();
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     let out = dir.join("out");
     let (ok, stdout, stderr) = worker(&[
@@ -45,6 +46,12 @@ fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
         "--out",
         out.to_str().unwrap(),
     ]);
+    (ok, stdout, stderr, out)
+}
+
+#[test]
+fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
+    let (ok, stdout, stderr, out) = export("worker-export", GENOME);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("wrote"), "{stdout}");
     let design = std::fs::read_to_string(out.join("design.vxa")).unwrap();
@@ -75,25 +82,10 @@ fn export_writes_stl_per_material_vxa_and_one_svg_per_layer() {
 
 #[test]
 fn an_out_of_range_genome_is_refused_naming_the_point_and_field() {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("worker-nan");
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("genome.json"),
-        GENOME.replace(r#""falloff": 0.3"#, r#""falloff": 5.0"#),
-    )
-    .unwrap();
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
-    let (ok, _, stderr) = worker(&[
-        "export",
-        "--genome",
-        dir.join("genome.json").to_str().unwrap(),
-        "--scene",
-        dir.join("scene.toml").to_str().unwrap(),
-        "--resolution",
-        "6x20x6",
-        "--out",
-        dir.join("out").to_str().unwrap(),
-    ]);
+    let (ok, _, stderr, _) = export(
+        "worker-out-of-range",
+        &GENOME.replace(r#""falloff": 0.3"#, r#""falloff": 5.0"#),
+    );
     assert!(!ok);
     assert!(
         stderr.contains("falloff") && stderr.contains("point 4"),

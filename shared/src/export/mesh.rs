@@ -150,53 +150,37 @@ pub fn boundary_mesh(
         }
     }
 
-    // One vertex per class; a lattice point with several classes is a pinch: pull each towards
-    // the voxels of its faces.
-    let mut classes_at_point: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    for (f, face) in faces.iter().enumerate() {
-        for k in 0..4 {
-            let root = classes.find(4 * f + k);
-            let list = classes_at_point
-                .entry(point_key(face.corners[k]))
-                .or_default();
-            if !list.contains(&root) {
-                list.push(root);
-            }
-        }
-    }
+    // One vertex per class, and the triangles; a lattice point with several vertices is a pinch:
+    // pull each towards the voxels of its faces.
     let mut vertex_of_root = vec![u32::MAX; 4 * faces.len()];
     let mut centre_sum: Vec<([f64; 3], usize)> = Vec::new();
+    let mut vertices_at_point: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut point_of_vertex = Vec::new();
     let mut mesh = TriangleMesh::default();
     for (f, face) in faces.iter().enumerate() {
-        for k in 0..4 {
+        let mut v = [0u32; 4];
+        for (k, vk) in v.iter_mut().enumerate() {
             let root = classes.find(4 * f + k);
             if vertex_of_root[root] == u32::MAX {
                 vertex_of_root[root] = mesh.vertices.len() as u32;
                 mesh.vertices.push(face.corners[k].map(|c| c as f64));
                 centre_sum.push(([0.0; 3], 0));
+                let point = point_key(face.corners[k]);
+                *vertices_at_point.entry(point).or_default() += 1;
+                point_of_vertex.push(point);
             }
-            let v = vertex_of_root[root] as usize;
+            *vk = vertex_of_root[root];
+            let sum = &mut centre_sum[*vk as usize];
             for a in 0..3 {
-                centre_sum[v].0[a] += face.cell[a] as f64 + 0.5;
+                sum.0[a] += face.cell[a] as f64 + 0.5;
             }
-            centre_sum[v].1 += 1;
+            sum.1 += 1;
         }
-    }
-    for f in 0..faces.len() {
-        let v: [u32; 4] = std::array::from_fn(|k| vertex_of_root[classes.find(4 * f + k)]);
         mesh.triangles.push([v[0], v[1], v[2]]);
         mesh.triangles.push([v[0], v[2], v[3]]);
     }
-    let mut pinched = vec![false; mesh.vertices.len()];
-    for (f, face) in faces.iter().enumerate() {
-        for k in 0..4 {
-            if classes_at_point[&point_key(face.corners[k])].len() > 1 {
-                pinched[vertex_of_root[classes.find(4 * f + k)] as usize] = true;
-            }
-        }
-    }
     for (v, position) in mesh.vertices.iter_mut().enumerate() {
-        if pinched[v] {
+        if vertices_at_point[&point_of_vertex[v]] > 1 {
             let (sum, count) = centre_sum[v];
             for a in 0..3 {
                 position[a] += PINCH_OFFSET * (sum[a] / count as f64 - position[a]);

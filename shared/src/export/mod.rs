@@ -16,7 +16,7 @@ pub use plot::{PlotSpec, Series, line_plot};
 pub use render::{Image, render_isometric};
 pub use scaling::{PhysicalBuild, dynamic_actuation_force, equivalent_actuation_period};
 pub use stl::{read_binary_stl, write_binary_stl};
-pub use threemf::write_3mf;
+pub use threemf::{package_3mf, write_3mf};
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 
 use crate::material::MaterialId;
@@ -51,12 +51,9 @@ pub fn write_fabrication_files(
     let voxel_size = scene.voxel_size(grid.dims());
     std::fs::create_dir_all(dir.join("layers"))?;
     let mut written = Vec::new();
-    let counts = grid.material_counts(palette.len());
-    for (m, mesh) in material_meshes_mm(grid, palette.len(), voxel_size)
-        .iter()
-        .enumerate()
-    {
-        if counts[m] == 0 {
+    let meshes = material_meshes_mm(grid, palette.len(), voxel_size);
+    for (m, mesh) in meshes.iter().enumerate() {
+        if mesh.triangles.is_empty() {
             continue;
         }
         let name = PathBuf::from(format!(
@@ -82,7 +79,7 @@ pub fn write_fabrication_files(
     );
     std::fs::write(dir.join("design.vxa"), vxa)?;
     written.push(PathBuf::from("design.vxa"));
-    let package = write_3mf(grid, palette, voxel_size).map_err(std::io::Error::other)?;
+    let package = package_3mf(&meshes, palette).map_err(std::io::Error::other)?;
     std::fs::write(dir.join("design.3mf"), package)?;
     written.push(PathBuf::from("design.3mf"));
     let picture = render_isometric(grid, palette, 12.0)

@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use std::io::{Cursor, Write};
 
 use super::material_meshes_mm;
+use super::mesh::TriangleMesh;
 use crate::material::Palette;
 use crate::voxel::VoxelGrid;
 
@@ -18,9 +19,9 @@ const RELATIONSHIPS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 <Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships"><Relationship Target="/3D/3dmodel.model" Id="rel0" Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>
 "#;
 
-/// The model part: base materials (id 1, one per palette entry) and one object per material
-/// with voxels.
-pub fn model_xml(grid: &VoxelGrid, palette: &Palette, voxel_size: f64) -> String {
+/// The model part: base materials (id 1, one per palette entry) and one object per non-empty
+/// mesh of `meshes` (millimetres, index = material id).
+fn model_xml(meshes: &[TriangleMesh], palette: &Palette) -> String {
     let mut x = String::new();
     let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
     let _ = writeln!(
@@ -40,13 +41,9 @@ pub fn model_xml(grid: &VoxelGrid, palette: &Palette, voxel_size: f64) -> String
         );
     }
     let _ = writeln!(x, "</basematerials>");
-    let counts = grid.material_counts(palette.len());
     let mut objects = Vec::new();
-    for (m, mesh) in material_meshes_mm(grid, palette.len(), voxel_size)
-        .iter()
-        .enumerate()
-    {
-        if counts[m] == 0 {
+    for (m, mesh) in meshes.iter().enumerate() {
+        if mesh.triangles.is_empty() {
             continue;
         }
         let id = m + 2;
@@ -76,19 +73,27 @@ pub fn model_xml(grid: &VoxelGrid, palette: &Palette, voxel_size: f64) -> String
     x
 }
 
-/// The whole .3mf package as bytes.
+/// The whole .3mf package of a design as bytes.
 pub fn write_3mf(
     grid: &VoxelGrid,
     palette: &Palette,
     voxel_size: f64,
 ) -> zip::result::ZipResult<Vec<u8>> {
+    package_3mf(
+        &material_meshes_mm(grid, palette.len(), voxel_size),
+        palette,
+    )
+}
+
+/// The .3mf package of per-material meshes already built (millimetres, index = material id).
+pub fn package_3mf(meshes: &[TriangleMesh], palette: &Palette) -> zip::result::ZipResult<Vec<u8>> {
     let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
     let options =
         zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
     for (name, content) in [
         ("[Content_Types].xml", CONTENT_TYPES.to_string()),
         ("_rels/.rels", RELATIONSHIPS.to_string()),
-        ("3D/3dmodel.model", model_xml(grid, palette, voxel_size)),
+        ("3D/3dmodel.model", model_xml(meshes, palette)),
     ] {
         zip.start_file(name, options)?;
         zip.write_all(content.as_bytes())?;

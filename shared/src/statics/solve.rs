@@ -313,8 +313,7 @@ impl StaticSolver {
                         Ok(used) => iterations += used,
                         Err(used) => {
                             iterations += used;
-                            (relative, _) =
-                                self.true_residual(rhs, x, &x_lo, &mut residual, norm_f);
+                            relative = self.true_residual(rhs, x, &x_lo, &mut residual, norm_f);
                             return Err(StaticsError::NotConverged {
                                 iterations,
                                 residual: relative,
@@ -327,9 +326,8 @@ impl StaticSolver {
             for ((hi, lo), d) in x.iter_mut().zip(&mut x_lo).zip(&correction) {
                 (*hi, *lo) = two_sum(*hi, *lo + d);
             }
-            let finite;
-            (relative, finite) = self.true_residual(rhs, x, &x_lo, &mut residual, norm_f);
-            if !finite {
+            relative = self.true_residual(rhs, x, &x_lo, &mut residual, norm_f);
+            if relative.is_infinite() {
                 break;
             }
             if relative <= self.tolerance {
@@ -346,7 +344,7 @@ impl StaticSolver {
     }
 
     /// The compensated true residual f − K (x + x_lo) into `residual`, its SI norm relative to
-    /// ‖f‖, and whether it is finite.
+    /// ‖f‖ (infinite when the state is not finite).
     fn true_residual(
         &self,
         rhs: &[f64],
@@ -354,15 +352,15 @@ impl StaticSolver {
         x_lo: &[f64],
         residual: &mut [f64],
         norm_f: f64,
-    ) -> (f64, bool) {
+    ) -> f64 {
         self.system
             .matrix
             .residual_compensated(rhs, x, x_lo, residual);
         let relative = self.system.si_force_norm(residual) / norm_f;
         if relative.is_finite() {
-            (relative, true)
+            relative
         } else {
-            (f64::INFINITY, false)
+            f64::INFINITY
         }
     }
 }

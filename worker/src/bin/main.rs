@@ -3,8 +3,11 @@
 
 use std::path::PathBuf;
 
+use amorph::genome::Genome;
+use amorph::scene::Scene;
+use amorph::voxel::GridDims;
 use anyhow::Context;
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 
 #[derive(Debug, Parser)]
 #[command(version, about = "Amorph worker: stateless evaluation of genomes")]
@@ -13,31 +16,42 @@ struct Cli {
     command: Command,
 }
 
+/// A saved genome in a scene at a resolution: what both commands start from.
+#[derive(Debug, Args)]
+struct Design {
+    /// A genome JSON, or a results file holding one such as best_genome.json.
+    #[arg(long)]
+    genome: PathBuf,
+    /// A run config (its [scene] is used) or a bare scene TOML.
+    #[arg(long)]
+    scene: PathBuf,
+    /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
+    #[arg(long)]
+    resolution: String,
+}
+
+impl Design {
+    fn load(&self) -> anyhow::Result<(Genome, Scene, GridDims)> {
+        Ok((
+            amorph_worker::read_genome(&self.genome)?,
+            amorph_worker::read_scene(&self.scene)?,
+            amorph_worker::parse_resolution(&self.resolution)?,
+        ))
+    }
+}
+
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Evaluates one genome (a genome JSON, or a results file such as best_genome.json) and prints
-    /// its outcome as JSON.
+    /// Evaluates one genome and prints its outcome as JSON.
     Evaluate {
-        #[arg(long)]
-        genome: PathBuf,
-        /// A run config (its [scene] is used) or a bare scene TOML.
-        #[arg(long)]
-        scene: PathBuf,
-        /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
-        #[arg(long)]
-        resolution: String,
+        #[command(flatten)]
+        design: Design,
     },
-    /// Writes the fabrication files of a genome (e.g. a run's best_genome.json) at a resolution:
-    /// one STL per material (mm), design.vxa for VoxCAD/Voxelyze, one SVG per laser-cut layer.
+    /// Writes the fabrication files of a genome at a resolution: one STL per material (mm),
+    /// design.3mf, design.vxa for VoxCAD/Voxelyze, design.png and one SVG per laser-cut layer.
     Export {
-        #[arg(long)]
-        genome: PathBuf,
-        /// A run config (its [scene] is used) or a bare scene TOML.
-        #[arg(long)]
-        scene: PathBuf,
-        /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
-        #[arg(long)]
-        resolution: String,
+        #[command(flatten)]
+        design: Design,
         /// Folder to write into (created if missing).
         #[arg(long)]
         out: PathBuf,
@@ -56,29 +70,16 @@ fn main() -> std::process::ExitCode {
 
 fn try_main(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Evaluate {
-            genome,
-            scene,
-            resolution,
-        } => {
-            let genome = amorph_worker::read_genome(&genome)?;
-            let scene = amorph_worker::read_scene(&scene)?;
-            let dims = amorph_worker::parse_resolution(&resolution)?;
+        Command::Evaluate { design } => {
+            let (genome, scene, dims) = design.load()?;
             let outcome = amorph_worker::evaluate(&genome, &scene, dims);
             println!(
                 "{}",
                 serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
             );
         }
-        Command::Export {
-            genome,
-            scene,
-            resolution,
-            out,
-        } => {
-            let genome = amorph_worker::read_genome(&genome)?;
-            let scene = amorph_worker::read_scene(&scene)?;
-            let dims = amorph_worker::parse_resolution(&resolution)?;
+        Command::Export { design, out } => {
+            let (genome, scene, dims) = design.load()?;
             genome
                 .validate(scene.limits(), scene.palette().len())
                 .context("the genome does not fit the scene")?;
