@@ -2,12 +2,11 @@
 //! gRPC workers in the cluster. An evaluation is a pure function of (genome, scene, resolution),
 //! so any evaluator gives the search the same outcomes.
 
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use amorph::genome::Genome;
-use amorph::outcome::{Failure, Outcome};
+use amorph::outcome::Outcome;
 use amorph::scene::Scene;
 use amorph::voxel::GridDims;
 
@@ -21,6 +20,19 @@ pub struct Task {
     pub dims: GridDims,
 }
 
+/// One finished task of a batch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Completion {
+    /// Position of the task in its batch.
+    pub slot: usize,
+    pub outcome: Outcome,
+    /// Who evaluated it: a worker's `name (id)`, `local`, or `coordinator` for a task marked
+    /// failed after worker errors.
+    pub worker: String,
+    /// Wall time of the evaluation where it ran, s.
+    pub wall_seconds: f64,
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum EvaluatorError {
     #[error("evaluator stopped: {0}")]
@@ -28,29 +40,29 @@ pub enum EvaluatorError {
 }
 
 /// Evaluates a batch of tasks and returns their outcomes in task order. `on_done` is called once
-/// per finished task (from any thread), for progress reporting.
+/// per finished task as it finishes (from the calling thread or any other), so the run store can
+/// record it at once.
 pub trait Evaluator {
     fn evaluate(
         &mut self,
         tasks: &[Task],
-        on_done: &(dyn Fn(&Outcome) + Sync),
+        on_done: &(dyn Fn(&Task, &Completion) + Sync),
     ) -> Result<Vec<Outcome>, EvaluatorError>;
+
+    /// A one-line state of the evaluator for progress lines (workers, leases), if it has one.
+    fn status(&self) -> Option<String> {
+        None
+    }
+
+    /// Errors workers reported since the last call (task, worker, message), for the run store.
+    fn take_worker_errors(&mut self) -> Vec<(TaskId, String, String)> {
+        Vec::new()
+    }
 }
 
-/// Evaluates one task, turning a panic in the physics (a bug of ours) into a failed outcome so
-/// one bad design never brings a run down.
+/// Evaluates one task exactly as a worker does (a panic in the physics becomes a failed outcome).
 pub fn evaluate_task(scene: &Scene, task: &Task) -> Outcome {
-    catch_unwind(AssertUnwindSafe(|| {
-        amorph::evaluate::evaluate(&task.genome, scene, task.dims)
-    }))
-    .unwrap_or_else(|panic| {
-        let message = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown panic".into());
-        Outcome::failed(Failure::Internal(message))
-    })
+    amorph_worker::evaluate_caught(&task.genome, scene, task.dims)
 }
 
 /// Evaluates on threads of this process, one evaluation per thread at a time.
@@ -80,7 +92,7 @@ impl Evaluator for LocalEvaluator {
     fn evaluate(
         &mut self,
         tasks: &[Task],
-        on_done: &(dyn Fn(&Outcome) + Sync),
+        on_done: &(dyn Fn(&Task, &Completion) + Sync),
     ) -> Result<Vec<Outcome>, EvaluatorError> {
         let next = AtomicUsize::new(0);
         let scene = &*self.scene;
@@ -92,9 +104,15 @@ impl Evaluator for LocalEvaluator {
                         loop {
                             let i = next.fetch_add(1, Ordering::Relaxed);
                             let Some(task) = tasks.get(i) else { break };
-                            let outcome = evaluate_task(scene, task);
-                            on_done(&outcome);
-                            mine.push((i, outcome));
+                            let started = std::time::Instant::now();
+                            let completion = Completion {
+                                slot: i,
+                                outcome: evaluate_task(scene, task),
+                                worker: "local".into(),
+                                wall_seconds: started.elapsed().as_secs_f64(),
+                            };
+                            on_done(task, &completion);
+                            mine.push((i, completion.outcome));
                         }
                         mine
                     })

@@ -2,14 +2,18 @@
 //! an evaluator (local threads, or gRPC workers), applies deterministic crowding and migration, and
 //! writes the results folder.
 
+pub mod cluster;
 pub mod config;
 pub mod evaluator;
 pub mod ids;
+pub mod job;
 pub mod progress;
 pub mod results;
 pub mod run;
 pub mod search;
+pub mod store;
 
 pub use config::RunConfig;
 pub use evaluator::{Evaluator, LocalEvaluator, Task};
-pub use run::{RunSummary, StopReason, run};
+pub use job::{JobOptions, StoreMode, run_job};
+pub use run::{RunContext, RunSummary, StopReason, run};

@@ -1,4 +1,5 @@
-//! The terminal progress bar: evaluations, evaluations per second and the best RMS error.
+//! The terminal progress bar: evaluations, evaluations per second, the best design's headline
+//! figure overall and per island, and the cluster's state (workers, leases).
 
 use amorph::voxel::GridDims;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -37,11 +38,29 @@ impl Progress {
         self.bar.inc(1);
     }
 
-    /// `best` is the task's headline figure of the best design so far (RMS error, speed).
-    pub fn epoch(&self, epoch: usize, best: Option<String>, dims: GridDims) {
-        let best = best.unwrap_or_else(|| "-".into());
-        self.bar
-            .set_message(format!("epoch {epoch}, {dims}, best {best}"));
+    /// `best` is the task's headline figure of the best design so far (RMS error, speed),
+    /// `islands` each island's, `cluster` the evaluator's state if it has one.
+    pub fn epoch(
+        &self,
+        epoch: usize,
+        best: Option<String>,
+        dims: GridDims,
+        islands: &[Option<String>],
+        cluster: Option<&str>,
+    ) {
+        let dash = || "-".to_owned();
+        let mut line = format!("epoch {epoch}, {dims}, best {}", best.unwrap_or_else(dash));
+        if islands.len() > 1 {
+            let each: Vec<String> = islands
+                .iter()
+                .map(|b| b.clone().unwrap_or_else(dash))
+                .collect();
+            line.push_str(&format!(" | islands: {}", each.join(", ")));
+        }
+        if let Some(cluster) = cluster {
+            line.push_str(&format!(" | {cluster}"));
+        }
+        self.bar.set_message(line);
     }
 
     pub fn finish(&self, summary: &RunSummary) {

@@ -1,8 +1,9 @@
 //! The run loop: initial populations, epochs of breeding and evaluation, migration, resolution
 //! switches, and the stopping rules.
 
-use std::sync::Arc;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use amorph::genome::Genome;
@@ -14,11 +15,14 @@ use serde::Serialize;
 use tracing::info;
 
 use crate::config::RunConfig;
-use crate::evaluator::{Evaluator, EvaluatorError, Task};
+use crate::evaluator::{Completion, Evaluator, EvaluatorError, Task};
 use crate::ids::{IslandId, TaskId};
 use crate::progress::Progress;
 use crate::results::ResultWriter;
 use crate::search::{Breeding, Individual, Island, ResolutionState, migrate};
+use crate::store::{
+    EpochRecord, EvaluationRecord, MigrationRecord, Purpose, RunStore, StoreError, StoredEvaluation,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -26,6 +30,20 @@ pub enum RunError {
     Evaluator(#[from] EvaluatorError),
     #[error("results: {0}")]
     Results(#[from] std::io::Error),
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    #[error("resume: {0}")]
+    Replay(String),
+}
+
+/// What a run needs besides its config and evaluator.
+#[derive(Clone, Copy, Debug)]
+pub struct RunContext<'a> {
+    /// Every evaluation, epoch and migration goes here as it happens; a resumed run replays from it.
+    pub store: &'a RunStore,
+    /// Set (e.g. by Ctrl-C) to stop at the next epoch boundary or mid-batch.
+    pub shutdown: &'a AtomicBool,
+    pub progress: &'a Progress,
 }
 
 pub type Result<T> = std::result::Result<T, RunError>;
@@ -88,18 +106,35 @@ struct Search {
     epoch: usize,
     evaluations: u64,
     next_task: u64,
+    /// Outcomes of an earlier, interrupted session of this run, by task id (see [`crate::store`]).
+    replay: HashMap<u64, StoredEvaluation>,
+    /// The last epoch that session recorded: up to it the replay must match the store exactly.
+    replay_until: Option<usize>,
+    clock: RunClock,
+}
+
+/// Wall time of the run across sessions: what earlier sessions used plus this session's time.
+struct RunClock {
+    started: Instant,
+    earlier: f64,
+}
+
+impl RunClock {
+    fn seconds(&self) -> f64 {
+        self.earlier + self.started.elapsed().as_secs_f64()
+    }
 }
 
 /// Runs a whole search with the given evaluator. Results are written as the run goes (history per
-/// epoch, best design when it improves) so an interrupted run keeps what it finished.
+/// epoch, best design when it improves, every evaluation to the run store) so an interrupted run
+/// keeps what it finished; a store holding an earlier session's evaluations is replayed first.
 pub fn run(
     config: &RunConfig,
     evaluator: &mut dyn Evaluator,
-    shutdown: &AtomicBool,
-    progress: &Progress,
+    ctx: &RunContext<'_>,
 ) -> Result<RunSummary> {
     let raw = &config.raw;
-    let started = Instant::now();
+    let progress = ctx.progress;
     let scene = Arc::new(raw.scene.clone());
     let breeding = Breeding {
         mutation: raw.search.mutation.clone(),
@@ -131,6 +166,11 @@ pub fn run(
             )
         })
         .collect();
+    let replay = ctx.store.evaluations()?;
+    let replay_until = ctx.store.last_epoch()?;
+    if !replay.is_empty() {
+        info!(evaluations = replay.len(), last_epoch = ?replay_until, "resuming: replaying the stored run");
+    }
     let mut search = Search {
         islands: Vec::new(),
         migration_rng,
@@ -138,9 +178,22 @@ pub fn run(
         epoch: 0,
         evaluations: 0,
         next_task: 0,
+        replay,
+        replay_until,
+        clock: RunClock {
+            started: Instant::now(),
+            earlier: ctx.store.recorded_wall_seconds()?,
+        },
     };
     let dims = schedule.dims(0);
-    let outcomes = evaluate_all(&mut search, evaluator, &initial, dims, progress)?;
+    let outcomes = evaluate_all(
+        &mut search,
+        evaluator,
+        &initial,
+        dims,
+        Purpose::Initial,
+        ctx,
+    )?;
     search.islands = initial
         .into_iter()
         .zip(outcomes)
@@ -150,7 +203,11 @@ pub fn run(
             let population = genomes
                 .into_iter()
                 .zip(outcomes)
-                .map(|(genome, outcome)| Individual { genome, outcome })
+                .map(|(genome, (task, outcome))| Individual {
+                    genome,
+                    outcome,
+                    task,
+                })
                 .collect();
             Island::from_evaluated(IslandId(i as u32), rng, population)
         })
@@ -159,7 +216,7 @@ pub fn run(
     let budget = &raw.budget;
     let stop = loop {
         let dims = schedule.dims(search.resolution.level);
-        if let Some(reason) = stop_reason(config, &search, started, shutdown) {
+        if let Some(reason) = stop_reason(config, &search, ctx.shutdown) {
             break reason;
         }
         // Breed every island's epoch from its snapshot, evaluate all children as one batch.
@@ -182,9 +239,9 @@ pub fn run(
             .iter()
             .map(|c| c.iter().map(|c| c.genome.clone()).collect())
             .collect();
-        let outcomes = evaluate_all(&mut search, evaluator, &genomes, dims, progress)?;
+        let outcomes = evaluate_all(&mut search, evaluator, &genomes, dims, Purpose::Child, ctx)?;
         search.epoch += 1;
-        let wall = started.elapsed().as_secs_f64();
+        let wall = search.clock.seconds();
         for ((island, children), outcomes) in search.islands.iter_mut().zip(children).zip(outcomes)
         {
             let replacements = island.apply(children, outcomes);
@@ -201,15 +258,45 @@ pub fn run(
         }
 
         let migration = &raw.search.migration;
+        let mut migrations = Vec::new();
         if migration.interval > 0 && search.epoch.is_multiple_of(migration.interval) {
             for event in migrate(&mut search.islands, migration, &mut search.migration_rng) {
-                info!(from = %event.from, to = %event.to, replaced = ?event.replaced, "migration");
+                info!(epoch = search.epoch, from = %event.from, to = %event.to, emigrant = event.emigrant, replaced = ?event.replaced, task = %event.task, "migration");
+                migrations.push(MigrationRecord {
+                    from: event.from.0,
+                    to: event.to.0,
+                    emigrant_slot: event.emigrant,
+                    replaced_slot: event.replaced,
+                    task_id: event.task.0,
+                });
             }
         }
+        record_epoch(&search, &migrations, dims, ctx.store)?;
 
         let best = best_of(&search.islands);
         writer.best_so_far(best, dims)?;
-        progress.epoch(search.epoch, best.outcome.headline(), dims);
+        let island_bests: Vec<Option<String>> = search
+            .islands
+            .iter()
+            .map(|i| i.best().outcome.headline())
+            .collect();
+        let status = evaluator.status();
+        progress.epoch(
+            search.epoch,
+            best.outcome.headline(),
+            dims,
+            &island_bests,
+            status.as_deref(),
+        );
+        info!(
+            epoch = search.epoch,
+            evaluations = search.evaluations,
+            resolution = %dims,
+            best = best.outcome.headline().as_deref().unwrap_or("-"),
+            islands = ?island_bests,
+            cluster = status.as_deref().unwrap_or("-"),
+            "epoch done"
+        );
 
         // A switch re-evaluates every population; with less budget left than that, the run ends at
         // the current level rather than overshoot its evaluation budget.
@@ -229,10 +316,18 @@ pub fn run(
                 .iter()
                 .map(|i| i.population.iter().map(|ind| ind.genome.clone()).collect())
                 .collect();
-            let outcomes = evaluate_all(&mut search, evaluator, &genomes, dims, progress)?;
+            let outcomes = evaluate_all(
+                &mut search,
+                evaluator,
+                &genomes,
+                dims,
+                Purpose::Reevaluation,
+                ctx,
+            )?;
             for (island, outcomes) in search.islands.iter_mut().zip(outcomes) {
-                for (ind, outcome) in island.population.iter_mut().zip(outcomes) {
+                for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
                     ind.outcome = outcome;
+                    ind.task = task;
                 }
             }
         }
@@ -243,7 +338,7 @@ pub fn run(
         stop,
         epochs: search.epoch,
         evaluations: search.evaluations,
-        wall_seconds: started.elapsed().as_secs_f64(),
+        wall_seconds: search.clock.seconds(),
         dims,
         populations: search.islands.into_iter().map(|i| i.population).collect(),
         history,
@@ -253,12 +348,7 @@ pub fn run(
     Ok(summary)
 }
 
-fn stop_reason(
-    config: &RunConfig,
-    search: &Search,
-    started: Instant,
-    shutdown: &AtomicBool,
-) -> Option<StopReason> {
+fn stop_reason(config: &RunConfig, search: &Search, shutdown: &AtomicBool) -> Option<StopReason> {
     let budget = &config.raw.budget;
     if shutdown.load(Ordering::Relaxed) {
         return Some(StopReason::Shutdown);
@@ -269,9 +359,13 @@ fn stop_reason(
     {
         return Some(StopReason::EvaluationBudget);
     }
-    if budget
-        .wall_seconds
-        .is_some_and(|max| started.elapsed().as_secs_f64() >= max)
+    // While replaying what an earlier session recorded, only that session's own stopping rules
+    // apply: it went on, so this session goes on too.
+    let replaying = search.replay_until.is_some_and(|last| search.epoch < last);
+    if !replaying
+        && budget
+            .wall_seconds
+            .is_some_and(|max| search.clock.seconds() >= max)
     {
         return Some(StopReason::WallTime);
     }
@@ -289,34 +383,140 @@ fn stop_reason(
 }
 
 /// Evaluates one batch of genomes per island as a single evaluator call, returning the outcomes
-/// grouped the same way.
+/// (with their task ids) grouped the same way. Tasks whose outcome a resumed run's store already
+/// holds take it from there; every new outcome is stored the moment it arrives.
 fn evaluate_all(
     search: &mut Search,
     evaluator: &mut dyn Evaluator,
     genomes: &[Vec<Genome>],
     dims: GridDims,
-    progress: &Progress,
-) -> Result<Vec<Vec<Outcome>>> {
-    let tasks: Vec<Task> = genomes
-        .iter()
-        .flatten()
-        .map(|genome| {
+    purpose: Purpose,
+    ctx: &RunContext<'_>,
+) -> Result<Vec<Vec<(TaskId, Outcome)>>> {
+    let epoch = match purpose {
+        Purpose::Child => search.epoch + 1,
+        Purpose::Initial | Purpose::Reevaluation => search.epoch,
+    };
+    let resolution = dims.to_string();
+    let mut tasks = Vec::new();
+    let mut islands = Vec::new();
+    for (island, batch) in genomes.iter().enumerate() {
+        for genome in batch {
             search.next_task += 1;
-            Task {
+            tasks.push(Task {
                 id: TaskId(search.next_task),
                 genome: genome.clone(),
                 dims,
+            });
+            islands.push(island as u32);
+        }
+    }
+
+    let mut outcomes: Vec<Option<Outcome>> = vec![None; tasks.len()];
+    let mut fresh = Vec::new();
+    let mut fresh_slots = Vec::new();
+    for (slot, task) in tasks.iter().enumerate() {
+        let stored = search.replay.remove(&task.id.0).filter(|s| {
+            s.resolution == resolution
+                && serde_json::to_string(&task.genome).is_ok_and(|g| g == s.genome_json)
+        });
+        match stored {
+            Some(s) => {
+                outcomes[slot] = Some(s.outcome);
+                ctx.progress.evaluated();
             }
-        })
-        .collect();
-    let mut outcomes = evaluator
-        .evaluate(&tasks, &|_| progress.evaluated())?
-        .into_iter();
+            None => {
+                fresh.push(task.clone());
+                fresh_slots.push(slot);
+            }
+        }
+    }
+
+    if !fresh.is_empty() {
+        let store_error: Mutex<Option<StoreError>> = Mutex::new(None);
+        let on_done = |task: &Task, done: &Completion| {
+            ctx.progress.evaluated();
+            let record = EvaluationRecord {
+                task_id: task.id.0,
+                epoch,
+                island: islands[fresh_slots[done.slot]],
+                purpose,
+                resolution: resolution.clone(),
+                genome: &task.genome,
+                outcome: &done.outcome,
+                worker: &done.worker,
+                wall_seconds: done.wall_seconds,
+            };
+            if let Err(e) = ctx.store.record_evaluation(&record) {
+                let mut first = store_error.lock().unwrap_or_else(|e| e.into_inner());
+                first.get_or_insert(e);
+            }
+        };
+        let results = evaluator.evaluate(&fresh, &on_done)?;
+        if let Some(e) = store_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
+            return Err(e.into());
+        }
+        for (slot, outcome) in fresh_slots.iter().zip(results) {
+            outcomes[*slot] = Some(outcome);
+        }
+        for (task, worker, message) in evaluator.take_worker_errors() {
+            ctx.store.record_task_error(task.0, &worker, &message)?;
+        }
+    }
     search.evaluations += tasks.len() as u64;
+
+    let mut outcomes = tasks
+        .iter()
+        .zip(outcomes)
+        .map(|(task, o)| (task.id, o.expect("every task has an outcome")));
     Ok(genomes
         .iter()
         .map(|g| outcomes.by_ref().take(g.len()).collect())
         .collect())
+}
+
+/// Stores the end of an epoch. While replaying, first checks the replayed populations against the
+/// ones the earlier session recorded: any difference means the store is not this run's.
+fn record_epoch(
+    search: &Search,
+    migrations: &[MigrationRecord],
+    dims: GridDims,
+    store: &RunStore,
+) -> Result<()> {
+    let populations: Vec<Vec<(u64, Option<f64>)>> = search
+        .islands
+        .iter()
+        .map(|i| {
+            i.population
+                .iter()
+                .map(|ind| (ind.task.0, ind.outcome.fitness()))
+                .collect()
+        })
+        .collect();
+    if search.replay_until.is_some_and(|last| search.epoch <= last) {
+        let stored = store.population(search.epoch)?;
+        let replayed: Vec<Vec<u64>> = populations
+            .iter()
+            .map(|p| p.iter().map(|&(t, _)| t).collect())
+            .collect();
+        if stored != replayed {
+            return Err(RunError::Replay(format!(
+                "the replayed populations of epoch {} differ from the ones {} recorded",
+                search.epoch,
+                store.path().display()
+            )));
+        }
+    }
+    store.record_epoch(&EpochRecord {
+        epoch: search.epoch,
+        evaluations: search.evaluations,
+        wall_seconds: search.clock.seconds(),
+        resolution: dims.to_string(),
+        best_fitness: best_of(&search.islands).outcome.fitness(),
+        populations,
+        migrations,
+    })?;
+    Ok(())
 }
 
 fn best_of(islands: &[Island]) -> &Individual {

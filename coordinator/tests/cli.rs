@@ -60,7 +60,13 @@ fn a_small_run_completes_and_reports_its_results_folder() {
     let text = format!("results_dir = \"{}\"\n{GOOD}", dir.display());
     let path = write_config("good.toml", &text);
     let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
-        .args(["--config", path.to_str().unwrap(), "--threads", "2"])
+        .args([
+            "--config",
+            path.to_str().unwrap(),
+            "--local-workers",
+            "2",
+            "--fresh",
+        ])
         .output()
         .unwrap();
     assert!(
@@ -71,6 +77,19 @@ fn a_small_run_completes_and_reports_its_results_folder() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("after 10 evaluations"), "{stdout}");
     assert!(dir.join("cli").join("summary.md").is_file());
+    assert!(dir.join("cli").join("run.sqlite").is_file());
+
+    // Running it again would overwrite a finished run: refused, naming the store and the ways on.
+    let (ok, stderr) = coordinator(&["--config", path.to_str().unwrap()]);
+    assert!(!ok);
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(
+        errors[0].contains("run.sqlite")
+            && errors[0].contains("--resume")
+            && errors[0].contains("--fresh"),
+        "{stderr}"
+    );
 }
 
 #[test]

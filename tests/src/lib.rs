@@ -1,12 +1,20 @@
 //! End-to-end test harness: run configurations built in code, each in its own temporary results
-//! folder, through the same `run` the `coordinator` binary calls.
+//! folder, through the same code the `coordinator` and `worker` binaries run: in one process
+//! (the reference), as an in-process cluster on 127.0.0.1:0 with workers the test starts and kills,
+//! or as real processes.
 
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
+use amorph_coordinator::job::{JobError, JobOptions, StoreMode, run_job};
 use amorph_coordinator::progress::Progress;
-use amorph_coordinator::{LocalEvaluator, RunConfig, RunSummary, run};
+use amorph_coordinator::store::RunStore;
+use amorph_coordinator::{LocalEvaluator, RunConfig, RunContext, RunSummary, run};
+use amorph_worker::{ClientError, WorkerOptions, WorkerSummary, run_worker};
 
 /// A fresh, empty folder for one test's results, unique to this process.
 pub fn scratch_dir(test: &str) -> PathBuf {
@@ -18,7 +26,8 @@ pub fn scratch_dir(test: &str) -> PathBuf {
     dir
 }
 
-/// A small beam run at 4x12x4 (then 6x20x6 when it stalls), written to `results_dir`.
+/// A small beam run at 4x12x4 (then 6x20x6 when it stalls), written to `results_dir`. Cluster
+/// timings are short so lost workers are noticed within a second.
 pub fn small_beam_config(results_dir: &Path, evaluations: u64, seed: u64) -> RunConfig {
     let text = format!(
         r#"
@@ -37,6 +46,11 @@ evaluations = {evaluations}
 [resolution]
 levels = [[4, 12, 4], [6, 20, 6]]
 stall_epochs = 3
+[cluster]
+local_workers = 0
+heartbeat_ms = 100
+lease_ms = 1500
+worker_timeout_ms = 600
 [scene]
 kind = "beam"
 target = "circular_arc"
@@ -46,14 +60,166 @@ target = "circular_arc"
     RunConfig::parse(&text, Path::new("small.toml")).expect("valid test config")
 }
 
-/// Runs a config on `threads` local evaluation threads.
+/// Runs a config in this process on `threads` evaluation threads: the reference every cluster
+/// run must match bit for bit.
 pub fn run_locally(config: &RunConfig, threads: usize) -> RunSummary {
     let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), threads);
+    let store = RunStore::create(config, true).expect("run store");
     run(
         config,
         &mut evaluator,
-        &AtomicBool::new(false),
-        &Progress::hidden(),
+        &RunContext {
+            store: &store,
+            shutdown: &AtomicBool::new(false),
+            progress: &Progress::hidden(),
+        },
     )
     .expect("run completes")
+}
+
+/// Every island's final population (genomes and outcomes, with every bit of every number) as one
+/// string: equal strings mean bit-identical runs.
+pub fn fingerprint(summary: &RunSummary) -> String {
+    let islands: Vec<Vec<(String, String)>> = summary
+        .populations
+        .iter()
+        .map(|p| {
+            p.iter()
+                .map(|i| {
+                    (
+                        serde_json::to_string(&i.genome).expect("genome json"),
+                        serde_json::to_string(&i.outcome).expect("outcome json"),
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    serde_json::to_string(&islands).expect("fingerprint json")
+}
+
+/// A coordinator job running on its own thread, serving on 127.0.0.1:0.
+#[derive(Debug)]
+pub struct ClusterRun {
+    pub addr: SocketAddr,
+    pub store: PathBuf,
+    job: JoinHandle<Result<RunSummary, JobError>>,
+}
+
+impl ClusterRun {
+    /// Starts the job with `local_workers` in-process workers and waits until it listens.
+    pub fn start(config: &RunConfig, local_workers: usize, token: Option<&str>) -> Self {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let options = JobOptions {
+            store: StoreMode::Fresh,
+            listen: Some("127.0.0.1:0".into()),
+            local_workers: Some(local_workers),
+            token: token.map(str::to_owned),
+            on_listening: Some(tx),
+            ..JobOptions::default()
+        };
+        let cfg = config.clone();
+        let job = std::thread::spawn(move || run_job(&cfg, options));
+        let addr = rx
+            .recv_timeout(Duration::from_secs(30))
+            .expect("the coordinator listens within 30 s");
+        Self {
+            addr,
+            store: RunStore::path_for(config),
+            job,
+        }
+    }
+
+    pub fn url(&self) -> String {
+        format!("http://{}", self.addr)
+    }
+
+    /// Waits for the run to end.
+    pub fn join(self) -> RunSummary {
+        self.job
+            .join()
+            .expect("coordinator thread")
+            .expect("run completes")
+    }
+
+    /// Evaluations recorded in the run store so far.
+    pub fn evaluations(&self) -> u64 {
+        RunStore::peek_evaluation_count(&self.store).unwrap_or(0)
+    }
+
+    /// Blocks until the store holds at least `n` evaluations (panics after `timeout`).
+    pub fn wait_for_evaluations(&self, n: u64, timeout: Duration) {
+        let start = Instant::now();
+        while self.evaluations() < n {
+            assert!(
+                start.elapsed() < timeout,
+                "only {} of {n} evaluations after {timeout:?}",
+                self.evaluations()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+/// A worker running on a runtime of its own, as a separate process would.
+#[derive(Debug)]
+pub struct TestWorker {
+    runtime: tokio::runtime::Runtime,
+    task: tokio::task::JoinHandle<Result<WorkerSummary, ClientError>>,
+    stop: tokio::sync::watch::Sender<bool>,
+}
+
+impl TestWorker {
+    pub fn start(url: &str, threads: usize, token: Option<&str>) -> Self {
+        let mut opts = WorkerOptions::new(url, threads);
+        opts.token = token.map(str::to_owned);
+        opts.max_backoff = Duration::from_millis(200);
+        opts.give_up_after = Some(Duration::from_secs(60));
+        Self::with_options(opts)
+    }
+
+    pub fn with_options(opts: WorkerOptions) -> Self {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .enable_all()
+            .build()
+            .expect("worker runtime");
+        let (stop, stop_rx) = tokio::sync::watch::channel(false);
+        let task = runtime.spawn(run_worker(opts, stop_rx));
+        Self {
+            runtime,
+            task,
+            stop,
+        }
+    }
+
+    /// Kills the worker as a crash would: no goodbye, no hand-back, no reports of what it holds.
+    pub fn kill(self) {
+        self.task.abort();
+        self.runtime.shutdown_background();
+    }
+
+    /// Waits for the worker to end on its own (the run finished, or it was refused).
+    pub fn join(self) -> Result<WorkerSummary, ClientError> {
+        let _stop = self.stop;
+        self.runtime
+            .block_on(self.task)
+            .expect("worker task did not panic")
+    }
+}
+
+/// A workspace binary (`coordinator`, `worker`) next to this test's executable. `cargo test
+/// --workspace` builds them; run it that way.
+pub fn binary(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    let dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps/<test>");
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is missing: build the workspace binaries first (cargo test --workspace builds them)",
+        path.display()
+    );
+    path
 }

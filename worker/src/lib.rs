@@ -1,6 +1,12 @@
-//! The Amorph worker: stateless evaluation of genomes. Today it evaluates a saved genome offline
-//! (`worker evaluate`); the cluster issue adds `worker --connect URL`, pulling tasks over gRPC and
-//! evaluating them with the same function.
+//! The Amorph worker: stateless evaluation of genomes. `worker --connect URL` pulls tasks from a
+//! coordinator over gRPC ([`client`]) and evaluates them on a CPU pool ([`pool`]); `worker evaluate`
+//! and `worker export` do the same evaluation offline for a saved genome.
+
+pub mod client;
+pub mod pool;
+
+pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
+pub use pool::{EvaluationMode, evaluate_caught};
 
 use std::path::Path;
 
@@ -89,7 +95,7 @@ pub fn parse_resolution(text: &str) -> Result<GridDims> {
 
 /// Evaluates one genome, exactly as a worker does for a task.
 pub fn evaluate(genome: &Genome, scene: &Scene, dims: GridDims) -> Outcome {
-    amorph::evaluate::evaluate(genome, scene, dims)
+    evaluate_caught(genome, scene, dims)
 }
 
 fn read(path: &Path) -> Result<String> {

@@ -1,11 +1,13 @@
-//! `coordinator --config run.toml`: runs an evolutionary design job.
+//! `coordinator --config run.toml`: runs an evolutionary design job on a cluster of workers (by
+//! default, workers inside this process; `worker --connect URL` processes may join at any time).
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
+use amorph_coordinator::RunConfig;
+use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
 use amorph_coordinator::progress::Progress;
-use amorph_coordinator::{LocalEvaluator, RunConfig, run};
 use anyhow::Context;
 use clap::Parser;
 use tracing_subscriber::EnvFilter;
@@ -17,9 +19,19 @@ struct Cli {
     /// The run configuration (TOML); see configs/ for examples.
     #[arg(long)]
     config: PathBuf,
-    /// Local evaluation threads, overriding `evaluation.threads` (0 = one per core).
+    /// Continue the run in <results_dir>/<name>/run.sqlite (after a crash or Ctrl-C). The result is
+    /// bit-identical to a run that was never interrupted.
+    #[arg(long, conflicts_with = "fresh")]
+    resume: bool,
+    /// Delete an existing run store of this config and start over.
     #[arg(long)]
-    threads: Option<usize>,
+    fresh: bool,
+    /// Address to serve workers on, overriding `cluster.listen` (e.g. 0.0.0.0:50051).
+    #[arg(long)]
+    listen: Option<String>,
+    /// Workers inside this process, overriding `cluster.local_workers` (0: external workers only).
+    #[arg(long)]
+    local_workers: Option<usize>,
     /// Log level when RUST_LOG is not set (error, warn, info, debug, trace).
     #[arg(long, default_value = "warn")]
     log: String,
@@ -43,18 +55,39 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         )
         .with_writer(std::io::stderr)
         .init();
-    let mut config = RunConfig::load(&cli.config)?;
-    if let Some(threads) = cli.threads {
-        config.raw.evaluation.threads = threads;
-    }
-    let mut evaluator = LocalEvaluator::new(
-        Arc::new(config.raw.scene.clone()),
-        config.raw.evaluation.threads,
-    );
-    let progress = Progress::stderr(config.raw.budget.evaluations);
-    let shutdown = AtomicBool::new(false);
-    let summary = run(&config, &mut evaluator, &shutdown, &progress)
-        .with_context(|| format!("run '{}' failed", config.raw.name))?;
+    let config = RunConfig::load(&cli.config)?;
+    let shutdown = Arc::new(AtomicBool::new(false));
+    stop_on_signal(shutdown.clone());
+    let (tx, rx) = std::sync::mpsc::channel();
+    let options = JobOptions {
+        store: match (cli.resume, cli.fresh) {
+            (true, _) => StoreMode::Resume,
+            (false, true) => StoreMode::Fresh,
+            (false, false) => StoreMode::New,
+        },
+        listen: cli.listen,
+        local_workers: cli.local_workers,
+        token: None,
+        progress: Progress::stderr(config.raw.budget.evaluations),
+        shutdown: shutdown.clone(),
+        on_listening: Some(tx),
+    };
+    // Say where workers can connect, as soon as the server listens.
+    std::thread::spawn(move || {
+        if let Ok(addr) = rx.recv() {
+            eprintln!("coordinator: serving workers on {addr} (worker --connect http://{addr})");
+        }
+    });
+    let summary = run_job(&config, options).with_context(|| {
+        if shutdown.load(Ordering::Relaxed) {
+            format!(
+                "run '{}' stopped; continue it with --resume",
+                config.raw.name
+            )
+        } else {
+            format!("run '{}' failed", config.raw.name)
+        }
+    })?;
     let best = summary.best();
     let headline = best.outcome.headline().unwrap_or_else(|| "-".into());
     println!(
@@ -67,4 +100,34 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         config.run_dir().display()
     );
     Ok(())
+}
+
+/// Ctrl-C or SIGTERM asks the run to stop; everything finished is already in the run store.
+fn stop_on_signal(shutdown: Arc<AtomicBool>) {
+    std::thread::spawn(move || {
+        let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        else {
+            return;
+        };
+        rt.block_on(async {
+            let mut term =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+            let terminated = async {
+                match term.as_mut() {
+                    Some(t) => {
+                        t.recv().await;
+                    }
+                    None => std::future::pending().await,
+                }
+            };
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                _ = terminated => {}
+            }
+        });
+        eprintln!("coordinator: stopping (the run store keeps every finished evaluation)");
+        shutdown.store(true, Ordering::Relaxed);
+    });
 }

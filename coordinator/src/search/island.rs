@@ -12,13 +12,15 @@ use amorph::outcome::Outcome;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use crate::ids::IslandId;
+use crate::ids::{IslandId, TaskId};
 
 /// A member of a population and how it scored.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Individual {
     pub genome: Genome,
     pub outcome: Outcome,
+    /// The task whose evaluation gave `outcome` (its row in the run store).
+    pub task: TaskId,
 }
 
 /// A child waiting for evaluation, with the population slot of its dominant parent.
@@ -109,15 +111,16 @@ impl Island {
 
     /// Applies an epoch's evaluated children in order: each replaces its dominant parent only if
     /// strictly fitter than that slot's current occupant. Returns how many replaced.
-    pub fn apply(&mut self, children: Vec<Child>, outcomes: Vec<Outcome>) -> usize {
+    pub fn apply(&mut self, children: Vec<Child>, outcomes: Vec<(TaskId, Outcome)>) -> usize {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
         let mut replaced = 0;
-        for (child, outcome) in children.into_iter().zip(outcomes) {
+        for (child, (task, outcome)) in children.into_iter().zip(outcomes) {
             let slot = &mut self.population[child.dominant_parent];
             if outcome.is_fitter_than(&slot.outcome) {
                 *slot = Individual {
                     genome: child.genome,
                     outcome,
+                    task,
                 };
                 replaced += 1;
             }

@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::island::{Individual, Island};
-use crate::ids::IslandId;
+use crate::ids::{IslandId, TaskId};
 
 /// Which islands send migrants to which.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -76,6 +76,8 @@ pub struct MigrationEvent {
     pub emigrant: usize,
     /// Slot it took in the destination, if it was fit enough to take one.
     pub replaced: Option<usize>,
+    /// The task that evaluated the migrant (its genome's row in the run store).
+    pub task: TaskId,
 }
 
 /// A symmetric, cheap genome distance: the mean distance from each point to the nearest point of
@@ -173,6 +175,7 @@ pub fn migrate(
     departures
         .into_iter()
         .map(|(from, to, emigrant, migrant)| {
+            let task = migrant.task;
             let dest = &mut islands[to];
             let target = match params.replacement {
                 ArrivalReplacement::Worst => dest.worst_index(),
@@ -199,6 +202,7 @@ pub fn migrate(
                 to: islands_id(to),
                 emigrant,
                 replaced,
+                task,
             }
         })
         .collect()

@@ -1,3 +1,4 @@
+//! `worker --connect URL`: a stateless cluster worker that pulls tasks from a coordinator.
 //! `worker evaluate`: evaluates a saved genome in a scene at a resolution and prints the outcome.
 //! `worker export`: writes a saved genome's fabrication files (STL, VXA, SVG layers).
 
@@ -6,14 +7,60 @@ use std::path::PathBuf;
 use amorph::genome::Genome;
 use amorph::scene::Scene;
 use amorph::voxel::GridDims;
+use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
+use tracing_subscriber::EnvFilter;
 
 #[derive(Debug, Parser)]
-#[command(version, about = "Amorph worker: stateless evaluation of genomes")]
+#[command(
+    version,
+    about = "Amorph worker: stateless evaluation of genomes",
+    args_conflicts_with_subcommands = true
+)]
 struct Cli {
+    #[command(flatten)]
+    connect: Connect,
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
+}
+
+/// Serving a coordinator: `worker --connect http://host:50051`.
+#[derive(Debug, Args)]
+struct Connect {
+    /// The coordinator's URL: http://HOST:PORT, or https://HOST:PORT when it serves TLS.
+    #[arg(long)]
+    connect: Option<String>,
+    /// Evaluations at once (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Shared secret the coordinator requires.
+    #[arg(long, env = "AMORPH_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Name shown in the coordinator's logs and run store (default: host:pid).
+    #[arg(long)]
+    name: Option<String>,
+    /// PEM certificate of the authority that signed the coordinator's TLS certificate.
+    #[arg(long)]
+    ca: Option<PathBuf>,
+    /// Name to check the coordinator's certificate against, if not the URL's host.
+    #[arg(long)]
+    tls_domain: Option<String>,
+    /// Keep waiting for the next run when one finishes, instead of exiting.
+    #[arg(long)]
+    stay: bool,
+    /// Give up after this many seconds without reaching the coordinator (default: never).
+    #[arg(long)]
+    give_up_after: Option<f64>,
+    /// On SIGTERM, seconds to let running evaluations finish before handing them back.
+    #[arg(long, default_value_t = 30.0)]
+    grace_seconds: f64,
+    /// Answer every task at once without physics: measures the coordinator's dispatch capacity.
+    #[arg(long, hide = true)]
+    instant: bool,
+    /// Log level when RUST_LOG is not set.
+    #[arg(long, default_value = "warn")]
+    log: String,
 }
 
 /// A saved genome in a scene at a resolution: what both commands start from.
@@ -69,7 +116,10 @@ fn main() -> std::process::ExitCode {
 }
 
 fn try_main(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {
+    let Some(command) = cli.command else {
+        return serve(cli.connect);
+    };
+    match command {
         Command::Evaluate { design } => {
             let (genome, scene, dims) = design.load()?;
             let outcome = amorph_worker::evaluate(&genome, &scene, dims);
@@ -94,5 +144,79 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+fn serve(c: Connect) -> anyhow::Result<()> {
+    let Some(url) = c.connect else {
+        anyhow::bail!("give --connect URL to serve a coordinator, or a command (see --help)");
+    };
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(&c.log)),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let threads = c
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    anyhow::ensure!(threads >= 1, "--threads must be at least 1");
+    let seconds = |name: &str, s: f64| {
+        anyhow::ensure!(
+            s.is_finite() && s >= 0.0,
+            "{name} must be a non-negative number of seconds"
+        );
+        Ok(std::time::Duration::from_secs_f64(s))
+    };
+    let mut opts = WorkerOptions::new(url, threads);
+    if let Some(name) = c.name {
+        opts.name = name;
+    }
+    opts.token = c.token.filter(|t| !t.is_empty());
+    opts.ca_cert = c.ca;
+    opts.tls_domain = c.tls_domain;
+    opts.exit_when_finished = !c.stay;
+    opts.give_up_after = c
+        .give_up_after
+        .map(|s| seconds("--give-up-after", s))
+        .transpose()?;
+    opts.grace = seconds("--grace-seconds", c.grace_seconds)?;
+    opts.mode = if c.instant {
+        EvaluationMode::Instant
+    } else {
+        EvaluationMode::Physics
+    };
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let summary = runtime.block_on(async move {
+        let (stop, stop_rx) = tokio::sync::watch::channel(false);
+        tokio::spawn(async move {
+            let mut term =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+            let terminated = async {
+                match term.as_mut() {
+                    Some(t) => {
+                        t.recv().await;
+                    }
+                    None => std::future::pending().await,
+                }
+            };
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                _ = terminated => {}
+            }
+            eprintln!(
+                "worker: stopping (finishing running evaluations, then handing back the rest)"
+            );
+            let _ = stop.send(true);
+        });
+        run_worker(opts, stop_rx).await
+    })?;
+    eprintln!(
+        "worker: evaluated {}, reported {} ({} duplicates), handed back {}, sessions {}",
+        summary.evaluated, summary.reported, summary.duplicates, summary.released, summary.sessions
+    );
     Ok(())
 }

@@ -1,0 +1,11 @@
+//! The cluster: the task queue with leases, the gRPC service workers call, the server that hosts
+//! it, and the evaluator the search uses to hand batches to the cluster.
+
+pub mod evaluator;
+pub mod queue;
+pub mod server;
+pub mod service;
+
+pub use evaluator::ClusterEvaluator;
+pub use queue::{QueueRules, QueueStats, TaskQueue};
+pub use server::{ServerHandle, ServerOptions, start};

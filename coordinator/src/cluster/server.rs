@@ -1,0 +1,183 @@
+//! Starts the coordinator's gRPC server: the evaluation service behind an optional shared-secret
+//! check, the standard gRPC health service, optional TLS, explicit message size limits, and the
+//! reaper that returns expired leases to the queue.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use amorph_proto::MAX_MESSAGE_BYTES;
+use amorph_proto::v1::evaluation_coordinator_server::EvaluationCoordinatorServer;
+use tokio::sync::watch;
+use tokio::task::JoinHandle;
+use tokio_stream::wrappers::TcpListenerStream;
+use tonic::service::interceptor::InterceptedService;
+use tonic::transport::{Identity, Server, ServerTlsConfig};
+use tonic::{Request, Status};
+use tracing::{info, warn};
+
+use super::queue::TaskQueue;
+use super::service::CoordinatorService;
+
+/// How the server listens and whom it lets in.
+#[derive(Clone, Debug, Default)]
+pub struct ServerOptions {
+    /// Address to bind; port 0 picks a free one (see [`ServerHandle::addr`]).
+    pub listen: String,
+    /// Shared secret every call (but the health check) must carry as `authorization: Bearer …`.
+    pub token: Option<String>,
+    /// PEM certificate chain and private key: serve TLS instead of plain HTTP/2.
+    pub tls: Option<(PathBuf, PathBuf)>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ServerError {
+    #[error("cannot listen on {listen}: {source}")]
+    Bind {
+        listen: String,
+        source: std::io::Error,
+    },
+    #[error("TLS: {0}")]
+    Tls(String),
+}
+
+/// A running server; dropping it does not stop it, [`ServerHandle::shutdown`] does.
+#[derive(Debug)]
+pub struct ServerHandle {
+    pub addr: SocketAddr,
+    stop: watch::Sender<bool>,
+    serve: JoinHandle<()>,
+    reaper: JoinHandle<()>,
+}
+
+impl ServerHandle {
+    /// `http://addr` or `https://addr`, for workers on this machine.
+    pub fn url(&self, tls: bool) -> String {
+        format!("{}://{}", if tls { "https" } else { "http" }, self.addr)
+    }
+
+    /// Stops accepting calls and waits for the server to wind down (at most a few seconds).
+    pub async fn shutdown(self) {
+        let _ = self.stop.send(true);
+        self.reaper.abort();
+        let _ = tokio::time::timeout(Duration::from_secs(5), self.serve).await;
+    }
+}
+
+/// Checks the shared secret. Runs before any handler, so a rejected peer never touches the queue;
+/// the rejection is logged with the peer's address.
+#[derive(Clone, Debug)]
+pub struct TokenCheck {
+    expected: Option<Arc<[u8]>>,
+}
+
+impl TokenCheck {
+    pub fn new(token: Option<&str>) -> Self {
+        Self {
+            expected: token.map(|t| format!("Bearer {t}").into_bytes().into()),
+        }
+    }
+}
+
+impl tonic::service::Interceptor for TokenCheck {
+    fn call(&mut self, request: Request<()>) -> Result<Request<()>, Status> {
+        let Some(expected) = &self.expected else {
+            return Ok(request);
+        };
+        let given = request
+            .metadata()
+            .get(amorph_proto::AUTHORIZATION)
+            .map(|v| v.as_bytes());
+        if given.is_some_and(|g| constant_time_eq(g, expected)) {
+            Ok(request)
+        } else {
+            warn!(peer = ?request.remote_addr(), "call without the right token refused");
+            Err(Status::unauthenticated(
+                "missing or wrong token (pass the coordinator's shared secret with --token or AMORPH_TOKEN)",
+            ))
+        }
+    }
+}
+
+/// Compares without an early exit, so response time does not leak how much of a guess was right.
+fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+/// Binds and starts serving on the current tokio runtime.
+pub async fn start(
+    options: &ServerOptions,
+    queue: Arc<TaskQueue>,
+    scene: &amorph::scene::Scene,
+) -> Result<ServerHandle, ServerError> {
+    let listener = tokio::net::TcpListener::bind(&options.listen)
+        .await
+        .map_err(|source| ServerError::Bind {
+            listen: options.listen.clone(),
+            source,
+        })?;
+    let addr = listener.local_addr().map_err(|source| ServerError::Bind {
+        listen: options.listen.clone(),
+        source,
+    })?;
+
+    let service = EvaluationCoordinatorServer::new(CoordinatorService::new(queue.clone(), scene))
+        .max_decoding_message_size(MAX_MESSAGE_BYTES)
+        .max_encoding_message_size(MAX_MESSAGE_BYTES);
+    let service = InterceptedService::new(service, TokenCheck::new(options.token.as_deref()));
+    let (health, health_service) = tonic_health::server::health_reporter();
+    health
+        .set_service_status(
+            "amorph.v1.EvaluationCoordinator",
+            tonic_health::ServingStatus::Serving,
+        )
+        .await;
+    health
+        .set_service_status("", tonic_health::ServingStatus::Serving)
+        .await;
+
+    let mut builder = Server::builder()
+        .tcp_nodelay(true)
+        .http2_keepalive_interval(Some(Duration::from_secs(10)))
+        .http2_keepalive_timeout(Some(Duration::from_secs(10)));
+    if let Some((cert, key)) = &options.tls {
+        let read = |p: &PathBuf| {
+            std::fs::read(p).map_err(|e| ServerError::Tls(format!("{}: {e}", p.display())))
+        };
+        let identity = Identity::from_pem(read(cert)?, read(key)?);
+        builder = builder
+            .tls_config(ServerTlsConfig::new().identity(identity))
+            .map_err(|e| ServerError::Tls(e.to_string()))?;
+    }
+    let (stop, mut stopped) = watch::channel(false);
+    let router = builder.add_service(health_service).add_service(service);
+    let serve = tokio::spawn(async move {
+        let shutdown = async move {
+            let _ = stopped.wait_for(|s| *s).await;
+        };
+        if let Err(e) = router
+            .serve_with_incoming_shutdown(TcpListenerStream::new(listener), shutdown)
+            .await
+        {
+            warn!(error = %e, "gRPC server stopped with an error");
+        }
+    });
+
+    let rules = queue.rules().clone();
+    let tick = (rules.heartbeat_interval.min(rules.lease) / 4).max(Duration::from_millis(20));
+    let reaper = tokio::spawn(async move {
+        let mut interval = tokio::time::interval(tick);
+        loop {
+            interval.tick().await;
+            queue.reap(std::time::Instant::now());
+        }
+    });
+    info!(%addr, tls = options.tls.is_some(), token = options.token.is_some(), "coordinator listening");
+    Ok(ServerHandle {
+        addr,
+        stop,
+        serve,
+        reaper,
+    })
+}

@@ -1,0 +1,173 @@
+//! The whole coordinator job, as `coordinator --config` runs it: open (or resume) the run store,
+//! serve workers over gRPC, start the local workers, run the search on the cluster, then wind
+//! everything down. The tests drive the very same function.
+
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
+use tokio::sync::watch;
+use tracing::{info, warn};
+
+use crate::cluster::{self, ClusterEvaluator, ServerOptions, TaskQueue};
+use crate::config::RunConfig;
+use crate::progress::Progress;
+use crate::run::{RunContext, RunError, RunSummary, run};
+use crate::store::{RunStore, StoreError};
+
+/// How to start a run store.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StoreMode {
+    /// A new run; an existing store is an error.
+    #[default]
+    New,
+    /// A new run, deleting an existing store.
+    Fresh,
+    /// Continue the run in the existing store.
+    Resume,
+}
+
+/// Everything about a job that is not in its config.
+#[derive(Debug)]
+pub struct JobOptions {
+    pub store: StoreMode,
+    /// Overrides `cluster.listen`.
+    pub listen: Option<String>,
+    /// Overrides `cluster.local_workers`.
+    pub local_workers: Option<usize>,
+    /// Overrides the token from AMORPH_TOKEN / `cluster.token_file` (tests).
+    pub token: Option<String>,
+    pub progress: Progress,
+    /// Set to stop the run (Ctrl-C): it stops mid-batch, keeping every finished evaluation.
+    pub shutdown: Arc<AtomicBool>,
+    /// Told the server's address once it listens (before the first task is queued).
+    pub on_listening: Option<std::sync::mpsc::Sender<SocketAddr>>,
+}
+
+impl Default for JobOptions {
+    fn default() -> Self {
+        Self {
+            store: StoreMode::New,
+            listen: None,
+            local_workers: None,
+            token: None,
+            progress: Progress::hidden(),
+            shutdown: Arc::new(AtomicBool::new(false)),
+            on_listening: None,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    #[error(transparent)]
+    Server(#[from] cluster::server::ServerError),
+    #[error(transparent)]
+    Run(#[from] RunError),
+    #[error("config {path}: {message}")]
+    Config { path: String, message: String },
+    #[error("cannot start the async runtime: {0}")]
+    Runtime(std::io::Error),
+}
+
+/// Runs a config on the cluster: the coordinator's gRPC server, `local_workers` in-process workers
+/// and any `worker --connect` processes that join.
+pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, JobError> {
+    let cluster_config = &config.raw.cluster;
+    let token = match options.token.clone() {
+        Some(t) => Some(t),
+        None => cluster_config.token().map_err(|message| JobError::Config {
+            path: config.source.display().to_string(),
+            message,
+        })?,
+    };
+    let store = match options.store {
+        StoreMode::New => RunStore::create(config, false)?,
+        StoreMode::Fresh => RunStore::create(config, true)?,
+        StoreMode::Resume => RunStore::resume(config)?,
+    };
+    // The network side needs little CPU: two runtime threads leave the cores to the evaluations.
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .thread_name("coordinator-io")
+        .enable_all()
+        .build()
+        .map_err(JobError::Runtime)?;
+
+    let queue = Arc::new(TaskQueue::new(cluster_config.queue_rules()));
+    let server_options = ServerOptions {
+        listen: options
+            .listen
+            .clone()
+            .unwrap_or_else(|| cluster_config.listen.clone()),
+        token: token.clone(),
+        tls: cluster_config
+            .tls_cert
+            .clone()
+            .zip(cluster_config.tls_key.clone()),
+    };
+    let server = runtime.block_on(cluster::start(
+        &server_options,
+        queue.clone(),
+        &config.raw.scene,
+    ))?;
+    let url = server.url(server_options.tls.is_some());
+    if let Some(tx) = &options.on_listening {
+        let _ = tx.send(server.addr);
+    }
+
+    let (stop_workers, stop_rx) = watch::channel(false);
+    let local = options
+        .local_workers
+        .unwrap_or_else(|| cluster_config.local_worker_count());
+    let workers: Vec<_> = (0..local)
+        .map(|i| {
+            let mut opts = WorkerOptions::new(url.clone(), cluster_config.local_worker_threads);
+            opts.name = format!("local-{i}");
+            opts.token = token.clone();
+            opts.mode = EvaluationMode::Physics;
+            opts.exit_when_finished = true;
+            if server_options.tls.is_some() {
+                opts.ca_cert = cluster_config.tls_cert.clone();
+                opts.tls_domain = Some(
+                    cluster_config
+                        .tls_domain
+                        .clone()
+                        .unwrap_or_else(|| "localhost".into()),
+                );
+            }
+            runtime.spawn(run_worker(opts, stop_rx.clone()))
+        })
+        .collect();
+    info!(%url, local_workers = local, store = %store.path().display(), "coordinator ready");
+
+    let mut evaluator = ClusterEvaluator::new(queue.clone(), options.shutdown.clone());
+    let ctx = RunContext {
+        store: &store,
+        shutdown: &options.shutdown,
+        progress: &options.progress,
+    };
+    let result = run(config, &mut evaluator, &ctx);
+
+    // Wind down: workers learn the run finished on their next call; give them a moment to say
+    // goodbye, then stop the server either way.
+    queue.finish();
+    let _ = stop_workers.send(true);
+    runtime.block_on(async {
+        for worker in workers {
+            match tokio::time::timeout(Duration::from_secs(3), worker).await {
+                Ok(Ok(Ok(_))) => {}
+                Ok(Ok(Err(e))) => warn!(error = %e, "local worker ended with an error"),
+                Ok(Err(e)) => warn!(error = %e, "local worker panicked"),
+                Err(_) => warn!("local worker did not stop in time"),
+            }
+        }
+        server.shutdown().await;
+    });
+    runtime.shutdown_timeout(Duration::from_secs(1));
+    Ok(result?)
+}

@@ -1,0 +1,513 @@
+//! The run store: one SQLite file per run (`<results>/<name>/run.sqlite`) holding the config, every
+//! evaluation, a population snapshot per epoch and every migration, written as the run goes.
+//!
+//! Resuming replays the search from the seed: breeding is cheap and deterministic, so the replay
+//! draws the very same genomes and task ids, and every task already in the store takes its stored
+//! outcome instead of being evaluated again. The resumed run therefore ends bit-identical to an
+//! uninterrupted one, and nothing a worker finished before the crash is evaluated twice.
+//!
+//! Tables (analyse them with any SQLite tool, also while the run goes on: the file is in WAL mode):
+//! - `run(key, value)`: `config` (the effective config as TOML), `format`.
+//! - `evaluation(task_id, epoch, island, purpose, resolution, genome, outcome, fitness, worker,
+//!   wall_seconds, finished_unix)`: genome and outcome as the shared library's JSON.
+//! - `epoch(epoch, evaluations, wall_seconds, resolution, best_fitness)`.
+//! - `population(epoch, island, slot, task_id, fitness)`: who held each slot after the epoch (the
+//!   genome is the evaluation's, by task id, so snapshots cost a few bytes per individual).
+//! - `migration(epoch, from_island, to_island, emigrant_slot, replaced_slot, task_id)`.
+//! - `task_error(task_id, worker, message)`: a worker's error for a task, noted before a retry.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use amorph::genome::Genome;
+use amorph::outcome::Outcome;
+use rusqlite::{Connection, OptionalExtension, params};
+
+use crate::config::RunConfig;
+
+const FORMAT: &str = "amorph-run-store-1";
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("run store {path}: {source}")]
+    Sqlite {
+        path: PathBuf,
+        source: rusqlite::Error,
+    },
+    #[error(
+        "run store {0} already exists: pass --resume to continue that run, or --fresh to delete it and start over"
+    )]
+    Exists(PathBuf),
+    #[error("run store {0} does not exist: nothing to resume (run without --resume)")]
+    Missing(PathBuf),
+    #[error(
+        "run store {path} was made by a different config ({differs} differs); only [budget] and [cluster] may change on --resume"
+    )]
+    ConfigChanged { path: PathBuf, differs: String },
+    #[error("run store {path}: {message}")]
+    Corrupt { path: PathBuf, message: String },
+}
+
+pub type Result<T> = std::result::Result<T, StoreError>;
+
+/// Why a task was evaluated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Purpose {
+    Initial,
+    Child,
+    Reevaluation,
+}
+
+impl Purpose {
+    fn as_str(self) -> &'static str {
+        match self {
+            Self::Initial => "initial",
+            Self::Child => "child",
+            Self::Reevaluation => "reevaluation",
+        }
+    }
+}
+
+/// One evaluation as the store records it.
+#[derive(Clone, Debug)]
+pub struct EvaluationRecord<'a> {
+    pub task_id: u64,
+    pub epoch: usize,
+    pub island: u32,
+    pub purpose: Purpose,
+    pub resolution: String,
+    pub genome: &'a Genome,
+    pub outcome: &'a Outcome,
+    pub worker: &'a str,
+    pub wall_seconds: f64,
+}
+
+/// A stored outcome, to be reused by a resumed run if its task draws the same genome again.
+#[derive(Clone, Debug)]
+pub struct StoredEvaluation {
+    pub genome_json: String,
+    pub resolution: String,
+    pub outcome: Outcome,
+}
+
+#[derive(Debug)]
+pub struct RunStore {
+    path: PathBuf,
+    conn: Mutex<Connection>,
+}
+
+impl RunStore {
+    pub fn path_for(config: &RunConfig) -> PathBuf {
+        config.run_dir().join("run.sqlite")
+    }
+
+    /// Creates the store of a new run. An existing store is an error unless `fresh` (then it is
+    /// deleted), so a finished run is never overwritten by accident.
+    pub fn create(config: &RunConfig, fresh: bool) -> Result<Self> {
+        let path = Self::path_for(config);
+        if path.exists() {
+            if !fresh {
+                return Err(StoreError::Exists(path));
+            }
+            for suffix in ["", "-wal", "-shm"] {
+                let mut p = path.clone().into_os_string();
+                p.push(suffix);
+                let _ = std::fs::remove_file(PathBuf::from(p));
+            }
+        }
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| StoreError::Corrupt {
+                path: path.clone(),
+                message: format!("cannot create its folder: {e}"),
+            })?;
+        }
+        let store = Self::open_file(&path)?;
+        store.with(|c| {
+            c.execute_batch(SCHEMA)?;
+            c.execute(
+                "INSERT INTO run(key, value) VALUES ('format', ?1), ('config', ?2)",
+                params![FORMAT, config_text(config)],
+            )?;
+            Ok(())
+        })?;
+        Ok(store)
+    }
+
+    /// Opens the store of an earlier run of this config to resume it. The config must be the one
+    /// the store was made with, except for `[budget]` (a run may be extended).
+    pub fn resume(config: &RunConfig) -> Result<Self> {
+        let path = Self::path_for(config);
+        if !path.exists() {
+            return Err(StoreError::Missing(path));
+        }
+        let store = Self::open_file(&path)?;
+        let stored: Option<(String, String)> = store.with(|c| {
+            let get = |key: &str| {
+                c.query_row("SELECT value FROM run WHERE key = ?1", [key], |r| r.get(0))
+                    .optional()
+            };
+            Ok(match (get("format")?, get("config")?) {
+                (Some(f), Some(cfg)) => Some((f, cfg)),
+                _ => None,
+            })
+        })?;
+        let Some((format, stored_config)) = stored else {
+            return Err(StoreError::Corrupt {
+                path,
+                message: "no format or config recorded".into(),
+            });
+        };
+        if format != FORMAT {
+            return Err(StoreError::Corrupt {
+                path,
+                message: format!("format {format:?}, this coordinator reads {FORMAT:?}"),
+            });
+        }
+        let stored: toml::Table =
+            toml::from_str(&stored_config).map_err(|e| StoreError::Corrupt {
+                path: path.clone(),
+                message: format!("stored config: {}", e.message()),
+            })?;
+        let current: toml::Table =
+            toml::from_str(&config_text(config)).expect("our own TOML parses");
+        if let Some(differs) = first_difference(&stored, &current) {
+            return Err(StoreError::ConfigChanged { path, differs });
+        }
+        store.with(|c| {
+            c.execute(
+                "UPDATE run SET value = ?1 WHERE key = 'config'",
+                [config_text(config)],
+            )?;
+            Ok(())
+        })?;
+        Ok(store)
+    }
+
+    fn open_file(path: &Path) -> Result<Self> {
+        let conn = Connection::open(path).map_err(|source| StoreError::Sqlite {
+            path: path.to_owned(),
+            source,
+        })?;
+        let store = Self {
+            path: path.to_owned(),
+            conn: Mutex::new(conn),
+        };
+        // WAL: readers (a user's sqlite3 shell) never block the run; NORMAL sync keeps every
+        // committed row across a crash of this process (not across a power cut, which is the
+        // price of not syncing each evaluation to disk).
+        store.with(|c| {
+            c.pragma_update(None, "journal_mode", "WAL")?;
+            c.pragma_update(None, "synchronous", "NORMAL")?;
+            c.busy_timeout(std::time::Duration::from_secs(10))?;
+            Ok(())
+        })?;
+        Ok(store)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn with<T>(&self, f: impl FnOnce(&mut Connection) -> rusqlite::Result<T>) -> Result<T> {
+        let mut conn = self.conn.lock().unwrap_or_else(|e| e.into_inner());
+        f(&mut conn).map_err(|source| StoreError::Sqlite {
+            path: self.path.clone(),
+            source,
+        })
+    }
+
+    pub fn record_evaluation(&self, r: &EvaluationRecord<'_>) -> Result<()> {
+        let genome = serde_json::to_string(r.genome).expect("genomes serialize");
+        let outcome = serde_json::to_string(r.outcome).expect("outcomes serialize");
+        let finished = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64());
+        self.with(|c| {
+            c.prepare_cached(
+                "INSERT OR REPLACE INTO evaluation(task_id, epoch, island, purpose, resolution, genome, outcome, fitness, worker, wall_seconds, finished_unix)
+                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+            )?
+            .execute(params![
+                r.task_id as i64,
+                r.epoch as i64,
+                r.island,
+                r.purpose.as_str(),
+                r.resolution,
+                genome,
+                outcome,
+                r.outcome.fitness(),
+                r.worker,
+                r.wall_seconds,
+                finished
+            ])?;
+            Ok(())
+        })
+    }
+
+    pub fn record_task_error(&self, task_id: u64, worker: &str, message: &str) -> Result<()> {
+        self.with(|c| {
+            c.execute(
+                "INSERT INTO task_error(task_id, worker, message) VALUES (?1, ?2, ?3)",
+                params![task_id as i64, worker, message],
+            )?;
+            Ok(())
+        })
+    }
+
+    /// Records the end of an epoch: its totals, every island's population (slot → task id) and the
+    /// epoch's migrations, in one transaction.
+    pub fn record_epoch(&self, epoch: &EpochRecord<'_>) -> Result<()> {
+        self.with(|c| {
+            let tx = c.transaction()?;
+            tx.execute(
+                "INSERT OR REPLACE INTO epoch(epoch, evaluations, wall_seconds, resolution, best_fitness) VALUES (?1, ?2, ?3, ?4, ?5)",
+                params![
+                    epoch.epoch as i64,
+                    epoch.evaluations as i64,
+                    epoch.wall_seconds,
+                    epoch.resolution,
+                    epoch.best_fitness
+                ],
+            )?;
+            {
+                let mut row = tx.prepare_cached(
+                    "INSERT OR REPLACE INTO population(epoch, island, slot, task_id, fitness) VALUES (?1, ?2, ?3, ?4, ?5)",
+                )?;
+                for (island, members) in epoch.populations.iter().enumerate() {
+                    for (slot, &(task, fitness)) in members.iter().enumerate() {
+                        row.execute(params![
+                            epoch.epoch as i64,
+                            island as i64,
+                            slot as i64,
+                            task as i64,
+                            fitness
+                        ])?;
+                    }
+                }
+                tx.execute(
+                    "DELETE FROM migration WHERE epoch = ?1",
+                    [epoch.epoch as i64],
+                )?;
+                let mut row = tx.prepare_cached(
+                    "INSERT INTO migration(epoch, from_island, to_island, emigrant_slot, replaced_slot, task_id) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
+                )?;
+                for m in epoch.migrations {
+                    row.execute(params![
+                        epoch.epoch as i64,
+                        m.from,
+                        m.to,
+                        m.emigrant_slot as i64,
+                        m.replaced_slot.map(|s| s as i64),
+                        m.task_id as i64
+                    ])?;
+                }
+            }
+            tx.commit()
+        })
+    }
+
+    /// Every stored evaluation by task id, for a resumed run's replay.
+    pub fn evaluations(&self) -> Result<HashMap<u64, StoredEvaluation>> {
+        let rows: Vec<(i64, String, String, String)> = self.with(|c| {
+            let mut stmt =
+                c.prepare("SELECT task_id, genome, resolution, outcome FROM evaluation")?;
+            let rows = stmt
+                .query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)))?
+                .collect::<rusqlite::Result<Vec<_>>>()?;
+            Ok(rows)
+        })?;
+        rows.into_iter()
+            .map(|(id, genome_json, resolution, outcome)| {
+                let outcome = serde_json::from_str(&outcome).map_err(|e| StoreError::Corrupt {
+                    path: self.path.clone(),
+                    message: format!("evaluation of task {id}: {e}"),
+                })?;
+                Ok((
+                    id as u64,
+                    StoredEvaluation {
+                        genome_json,
+                        resolution,
+                        outcome,
+                    },
+                ))
+            })
+            .collect()
+    }
+
+    /// Wall seconds the run had used at its last recorded epoch (0 for a new run).
+    pub fn recorded_wall_seconds(&self) -> Result<f64> {
+        self.with(|c| {
+            c.query_row(
+                "SELECT COALESCE(MAX(wall_seconds), 0.0) FROM epoch",
+                [],
+                |r| r.get(0),
+            )
+        })
+    }
+
+    /// Last epoch recorded (None before the first epoch ended).
+    pub fn last_epoch(&self) -> Result<Option<usize>> {
+        self.with(|c| {
+            c.query_row("SELECT MAX(epoch) FROM epoch", [], |r| {
+                r.get::<_, Option<i64>>(0)
+            })
+        })
+        .map(|e| e.map(|e| e as usize))
+    }
+
+    /// The population of every island after `epoch`, as task ids in slot order.
+    pub fn population(&self, epoch: usize) -> Result<Vec<Vec<u64>>> {
+        let rows: Vec<(i64, i64, i64)> = self.with(|c| {
+            let mut stmt = c.prepare(
+                "SELECT island, slot, task_id FROM population WHERE epoch = ?1 ORDER BY island, slot",
+            )?;
+            let rows = stmt
+                .query_map([epoch as i64], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))?
+                .collect::<rusqlite::Result<Vec<_>>>()?;
+            Ok(rows)
+        })?;
+        let mut islands: Vec<Vec<u64>> = Vec::new();
+        for (island, _, task) in rows {
+            let island = island as usize;
+            if islands.len() <= island {
+                islands.resize(island + 1, Vec::new());
+            }
+            islands[island].push(task as u64);
+        }
+        Ok(islands)
+    }
+
+    /// Evaluations in the store at `path`, read without disturbing a run that is writing it (the
+    /// way to watch a run from outside).
+    pub fn peek_evaluation_count(path: &Path) -> Result<u64> {
+        let sqlite = |source| StoreError::Sqlite {
+            path: path.to_owned(),
+            source,
+        };
+        let conn = Connection::open_with_flags(path, rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY)
+            .map_err(sqlite)?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(sqlite)?;
+        conn.query_row("SELECT COUNT(*) FROM evaluation", [], |r| {
+            r.get::<_, i64>(0)
+        })
+        .map(|n| n as u64)
+        .map_err(sqlite)
+    }
+
+    /// Number of evaluations stored.
+    pub fn evaluation_count(&self) -> Result<u64> {
+        self.with(|c| {
+            c.query_row("SELECT COUNT(*) FROM evaluation", [], |r| {
+                r.get::<_, i64>(0)
+            })
+        })
+        .map(|n| n as u64)
+    }
+}
+
+/// The end of an epoch as [`RunStore::record_epoch`] stores it.
+#[derive(Debug)]
+pub struct EpochRecord<'a> {
+    pub epoch: usize,
+    pub evaluations: u64,
+    pub wall_seconds: f64,
+    pub resolution: String,
+    pub best_fitness: Option<f64>,
+    /// Per island, per slot: (task id of the individual's evaluation, its fitness).
+    pub populations: Vec<Vec<(u64, Option<f64>)>>,
+    pub migrations: &'a [MigrationRecord],
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct MigrationRecord {
+    pub from: u32,
+    pub to: u32,
+    pub emigrant_slot: usize,
+    pub replaced_slot: Option<usize>,
+    pub task_id: u64,
+}
+
+const SCHEMA: &str = "
+CREATE TABLE run (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE evaluation (
+    task_id INTEGER PRIMARY KEY,
+    epoch INTEGER NOT NULL,
+    island INTEGER NOT NULL,
+    purpose TEXT NOT NULL,
+    resolution TEXT NOT NULL,
+    genome TEXT NOT NULL,
+    outcome TEXT NOT NULL,
+    fitness REAL,
+    worker TEXT NOT NULL,
+    wall_seconds REAL NOT NULL,
+    finished_unix REAL NOT NULL
+);
+CREATE TABLE epoch (
+    epoch INTEGER PRIMARY KEY,
+    evaluations INTEGER NOT NULL,
+    wall_seconds REAL NOT NULL,
+    resolution TEXT NOT NULL,
+    best_fitness REAL
+);
+CREATE TABLE population (
+    epoch INTEGER NOT NULL,
+    island INTEGER NOT NULL,
+    slot INTEGER NOT NULL,
+    task_id INTEGER NOT NULL,
+    fitness REAL,
+    PRIMARY KEY (epoch, island, slot)
+);
+CREATE TABLE migration (
+    epoch INTEGER NOT NULL,
+    from_island INTEGER NOT NULL,
+    to_island INTEGER NOT NULL,
+    emigrant_slot INTEGER NOT NULL,
+    replaced_slot INTEGER,
+    task_id INTEGER NOT NULL
+);
+CREATE INDEX migration_epoch ON migration(epoch);
+CREATE TABLE task_error (task_id INTEGER NOT NULL, worker TEXT NOT NULL, message TEXT NOT NULL);
+";
+
+fn config_text(config: &RunConfig) -> String {
+    toml::to_string(&config.raw).expect("configs serialize")
+}
+
+/// The first key (dotted) whose value differs between two configs, ignoring `budget` (a run may
+/// be extended) and `cluster` (how workers connect never changes a result).
+fn first_difference(a: &toml::Table, b: &toml::Table) -> Option<String> {
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    for key in keys {
+        if key == "budget" || key == "cluster" {
+            continue;
+        }
+        match (a.get(key), b.get(key)) {
+            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                if let Some(inner) = first_difference_all(x, y) {
+                    return Some(format!("{key}.{inner}"));
+                }
+            }
+            (x, y) if x != y => return Some(key.clone()),
+            _ => {}
+        }
+    }
+    None
+}
+
+fn first_difference_all(a: &toml::Table, b: &toml::Table) -> Option<String> {
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    keys.into_iter()
+        .find_map(|key| match (a.get(key), b.get(key)) {
+            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                first_difference_all(x, y).map(|inner| format!("{key}.{inner}"))
+            }
+            (x, y) if x != y => Some(key.clone()),
+            _ => None,
+        })
+}

@@ -1,0 +1,276 @@
+//! Issue 4: the island-model cluster. The same config and seed give bit-identical final
+//! populations whatever evaluates them: one process, one gRPC worker, two, two of which one is
+//! killed mid-run, or workers that join late. Hostile peers get clear errors and change nothing.
+
+use std::time::Duration;
+
+use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
+use amorph_proto::v1::{self, task_result};
+use amorph_proto::{PROTOCOL_VERSION, convert};
+use amorph_tests::{
+    ClusterRun, TestWorker, fingerprint, run_locally, scratch_dir, small_beam_config,
+};
+use tonic::Code;
+
+const EVALUATIONS: u64 = 240;
+const SEED: u64 = 7;
+
+fn reference() -> String {
+    fingerprint(&run_locally(
+        &small_beam_config(&scratch_dir("cluster-reference"), EVALUATIONS, SEED),
+        2,
+    ))
+}
+
+#[test]
+fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
+    let expected = reference();
+
+    let config = small_beam_config(&scratch_dir("cluster-one"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let worker = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(summary.evaluations, EVALUATIONS);
+    assert_eq!(fingerprint(&summary), expected, "one worker");
+    assert!(worker.join().unwrap().evaluated > 0);
+
+    let config = small_beam_config(&scratch_dir("cluster-two"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let a = TestWorker::start(&run.url(), 1, None);
+    let b = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), expected, "two workers");
+    let (a, b) = (a.join().unwrap(), b.join().unwrap());
+    assert!(
+        a.evaluated > 0 && b.evaluated > 0,
+        "both worked: {a:?} {b:?}"
+    );
+
+    // Kill one worker mid-run: its leases expire and go to the survivor.
+    let config = small_beam_config(&scratch_dir("cluster-killed"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let survivor = TestWorker::start(&run.url(), 1, None);
+    let victim = TestWorker::start(&run.url(), 2, None);
+    run.wait_for_evaluations(EVALUATIONS / 3, Duration::from_secs(120));
+    victim.kill();
+    let summary = run.join();
+    assert_eq!(summary.evaluations, EVALUATIONS);
+    assert_eq!(fingerprint(&summary), expected, "a worker killed mid-run");
+    assert!(survivor.join().is_ok());
+}
+
+#[test]
+fn a_worker_that_connects_late_joins_the_run() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("cluster-late"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let early = TestWorker::start(&run.url(), 1, None);
+    run.wait_for_evaluations(EVALUATIONS / 4, Duration::from_secs(120));
+    let late = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), expected);
+    assert!(early.join().unwrap().evaluated > 0);
+    assert!(
+        late.join().unwrap().evaluated > 0,
+        "the late worker got work"
+    );
+}
+
+#[test]
+fn embedded_local_workers_run_the_real_path() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("cluster-local"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 2, None);
+    assert_eq!(fingerprint(&run.join()), expected);
+}
+
+#[test]
+fn a_wrong_token_or_protocol_version_is_refused_and_the_run_goes_on() {
+    let config = small_beam_config(&scratch_dir("cluster-auth"), 60, SEED);
+    let run = ClusterRun::start(&config, 0, Some("s3cret"));
+
+    let intruder = TestWorker::start(&run.url(), 1, Some("guess"));
+    let err = intruder.join().unwrap_err().to_string();
+    assert!(err.contains("Unauthenticated"), "{err}");
+    let anonymous = TestWorker::start(&run.url(), 1, None);
+    let err = anonymous.join().unwrap_err().to_string();
+    assert!(err.contains("Unauthenticated"), "{err}");
+
+    let rt = runtime();
+    let status = rt.block_on(async {
+        let mut client = client(&run.url()).await;
+        let mut request = tonic::Request::new(v1::RegisterRequest {
+            protocol_version: PROTOCOL_VERSION + 1,
+            capacity: 1,
+            name: "future".into(),
+        });
+        request
+            .metadata_mut()
+            .insert("authorization", "Bearer s3cret".parse().unwrap());
+        client.register(request).await.unwrap_err()
+    });
+    assert_eq!(status.code(), Code::FailedPrecondition);
+    assert!(status.message().contains("protocol version"), "{status:?}");
+
+    let honest = TestWorker::start(&run.url(), 1, Some("s3cret"));
+    let summary = run.join();
+    assert_eq!(summary.evaluations, 60);
+    assert!(honest.join().unwrap().evaluated == 60);
+}
+
+#[test]
+fn hostile_messages_get_clear_errors_and_lose_nothing() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("cluster-hostile"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let rt = runtime();
+    rt.block_on(async {
+        let mut c = client(&run.url()).await;
+        let id = c
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: 2,
+                name: "hostile".into(),
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .worker_id;
+        let report = |worker: &str, task_id: u64, result: task_result::Result| v1::ReportRequest {
+            worker_id: worker.into(),
+            results: vec![v1::TaskResult {
+                task_id,
+                result: Some(result),
+                wall_seconds: 0.0,
+            }],
+        };
+        let empty = convert::outcome_to_wire(&amorph::outcome::Outcome::failed(
+            amorph::outcome::Failure::Empty,
+        ));
+
+        // Unknown task id; a task that exists but was never leased to us; an unknown worker.
+        let s = c
+            .report(report(
+                &id,
+                999_999,
+                task_result::Result::Outcome(empty.clone()),
+            ))
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound, "{s:?}");
+        assert!(s.message().contains("999999"), "{s:?}");
+        let s = c
+            .report(report(&id, 1, task_result::Result::Outcome(empty.clone())))
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
+        assert!(s.message().contains("never leased"), "{s:?}");
+        let s = c
+            .heartbeat(v1::HeartbeatRequest {
+                worker_id: "w1-forged".into(),
+                active_task_ids: vec![],
+            })
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound, "{s:?}");
+
+        // Lease two tasks, answer one with a NaN fitness and one with garbage metrics: both are
+        // refused as this worker's errors and go back to the queue.
+        let tasks = c
+            .lease(v1::LeaseRequest {
+                worker_id: id.clone(),
+                max_tasks: 2,
+                wait_ms: 2000,
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .tasks;
+        assert_eq!(tasks.len(), 2);
+        let nan = v1::Outcome {
+            result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
+                fitness: f64::NAN,
+                metrics_json: b"{}".to_vec(),
+            })),
+        };
+        let garbage = v1::Outcome {
+            result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
+                fitness: -1.0,
+                metrics_json: b"\xff\xfe".to_vec(),
+            })),
+        };
+        let reply = c
+            .report(v1::ReportRequest {
+                worker_id: id.clone(),
+                results: vec![
+                    v1::TaskResult {
+                        task_id: tasks[0].task_id,
+                        result: Some(task_result::Result::Outcome(nan)),
+                        wall_seconds: f64::NAN,
+                    },
+                    v1::TaskResult {
+                        task_id: tasks[1].task_id,
+                        result: Some(task_result::Result::Outcome(garbage)),
+                        wall_seconds: 1.0,
+                    },
+                ],
+            })
+            .await
+            .unwrap()
+            .into_inner();
+        assert_eq!(
+            reply.dispositions,
+            vec![v1::ReportDisposition::Rejected as i32; 2]
+        );
+
+        // An oversized message is refused by the size limit before any handler runs.
+        let huge = v1::ReportRequest {
+            worker_id: id.clone(),
+            results: vec![v1::TaskResult {
+                task_id: tasks[0].task_id,
+                result: Some(task_result::Result::Error(
+                    "x".repeat(amorph_proto::MAX_MESSAGE_BYTES + 1),
+                )),
+                wall_seconds: 0.0,
+            }],
+        };
+        let s = c.report(huge).await.unwrap_err();
+        assert!(
+            matches!(
+                s.code(),
+                Code::ResourceExhausted | Code::OutOfRange | Code::Internal
+            ),
+            "{s:?}"
+        );
+        // A scene that is not the run's.
+        let s = c
+            .fetch_scene(v1::FetchSceneRequest {
+                worker_id: id.clone(),
+                scene_id: "scene-0000".into(),
+            })
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound);
+    });
+
+    // The run goes on with an honest worker and ends exactly as the reference: nothing the
+    // hostile peer did changed a result or lost a task.
+    let honest = TestWorker::start(&run.url(), 2, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), expected);
+    assert!(honest.join().is_ok());
+}
+
+fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap()
+}
+
+async fn client(url: &str) -> EvaluationCoordinatorClient<tonic::transport::Channel> {
+    EvaluationCoordinatorClient::connect(url.to_owned())
+        .await
+        .unwrap()
+        .max_encoding_message_size(2 * amorph_proto::MAX_MESSAGE_BYTES)
+}

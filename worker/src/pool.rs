@@ -1,0 +1,114 @@
+//! The CPU pool: evaluations run on plain threads of their own, never on the async runtime, so a
+//! long simulation cannot stall heartbeats or the network. One evaluation per thread at a time.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use amorph::genome::Genome;
+use amorph::outcome::{Failure, Outcome};
+use amorph::scene::Scene;
+use amorph::voxel::GridDims;
+use tokio::sync::mpsc::UnboundedSender;
+
+/// What the pool computes for a task.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EvaluationMode {
+    /// Voxelize and simulate: the real evaluation.
+    Physics,
+    /// Answer at once with an empty-design outcome: for measuring the coordinator's dispatch
+    /// capacity without any physics in the way.
+    Instant,
+}
+
+/// One task for the pool.
+#[derive(Debug)]
+pub struct Job {
+    pub task_id: u64,
+    pub genome: Genome,
+    pub scene: Arc<Scene>,
+    pub dims: GridDims,
+}
+
+/// A finished job: the outcome and the evaluation's wall time, s.
+#[derive(Debug)]
+pub struct JobDone {
+    pub task_id: u64,
+    pub outcome: Outcome,
+    pub wall_seconds: f64,
+}
+
+/// Evaluates one genome, turning a panic in the physics (a bug of ours) into a failed outcome so
+/// one bad design never brings a worker down.
+pub fn evaluate_caught(genome: &Genome, scene: &Scene, dims: GridDims) -> Outcome {
+    catch_unwind(AssertUnwindSafe(|| {
+        amorph::evaluate::evaluate(genome, scene, dims)
+    }))
+    .unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        Outcome::failed(Failure::Internal(message))
+    })
+}
+
+/// `threads` evaluation threads fed from one queue. Dropping the pool lets each thread finish its
+/// current job and exit.
+#[derive(Debug)]
+pub struct Pool {
+    jobs: Sender<Job>,
+    threads: usize,
+}
+
+impl Pool {
+    pub fn new(threads: usize, mode: EvaluationMode, done: UnboundedSender<JobDone>) -> Self {
+        let (jobs, queue) = channel::<Job>();
+        let queue = Arc::new(Mutex::new(queue));
+        for i in 0..threads {
+            let queue = queue.clone();
+            let done = done.clone();
+            std::thread::Builder::new()
+                .name(format!("evaluate-{i}"))
+                .spawn(move || work(&queue, mode, &done))
+                .expect("spawning an evaluation thread");
+        }
+        Self { jobs, threads }
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    pub fn submit(&self, job: Job) {
+        // The threads only stop once this pool is dropped, so the queue is always open here.
+        let _ = self.jobs.send(job);
+    }
+}
+
+fn work(queue: &Mutex<Receiver<Job>>, mode: EvaluationMode, done: &UnboundedSender<JobDone>) {
+    loop {
+        let job = {
+            let queue = queue.lock().unwrap_or_else(|e| e.into_inner());
+            match queue.recv() {
+                Ok(job) => job,
+                Err(_) => return,
+            }
+        };
+        let started = Instant::now();
+        let outcome = match mode {
+            EvaluationMode::Physics => evaluate_caught(&job.genome, &job.scene, job.dims),
+            EvaluationMode::Instant => Outcome::failed(Failure::Empty),
+        };
+        let finished = JobDone {
+            task_id: job.task_id,
+            outcome,
+            wall_seconds: started.elapsed().as_secs_f64(),
+        };
+        if done.send(finished).is_err() {
+            return;
+        }
+    }
+}
