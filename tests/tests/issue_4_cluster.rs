@@ -274,3 +274,36 @@ async fn client(url: &str) -> EvaluationCoordinatorClient<tonic::transport::Chan
         .unwrap()
         .max_encoding_message_size(2 * amorph_proto::MAX_MESSAGE_BYTES)
 }
+
+#[test]
+fn tls_with_a_token_runs_and_plain_http_is_refused() {
+    let dir = scratch_dir("cluster-tls");
+    let key = rcgen::generate_simple_self_signed(vec!["localhost".to_owned()]).unwrap();
+    let cert_path = dir.join("cert.pem");
+    let key_path = dir.join("key.pem");
+    std::fs::write(&cert_path, key.cert.pem()).unwrap();
+    std::fs::write(&key_path, key.signing_key.serialize_pem()).unwrap();
+    let mut config = small_beam_config(&dir, 60, SEED);
+    config.raw.cluster.tls_cert = Some(cert_path.clone());
+    config.raw.cluster.tls_key = Some(key_path);
+
+    // One local worker (which trusts the certificate it is given) and one external TLS worker.
+    let run = ClusterRun::start(&config, 1, Some("s3cret"));
+    let mut plain = amorph_worker::WorkerOptions::new(run.url(), 1);
+    plain.token = Some("s3cret".into());
+    plain.give_up_after = Some(Duration::from_secs(2));
+    plain.max_backoff = Duration::from_millis(200);
+    let plain = TestWorker::with_options(plain);
+    let mut opts = amorph_worker::WorkerOptions::new(format!("https://{}", run.addr), 1);
+    opts.token = Some("s3cret".into());
+    opts.ca_cert = Some(cert_path);
+    opts.tls_domain = Some("localhost".into());
+    opts.give_up_after = Some(Duration::from_secs(60));
+    let secure = TestWorker::with_options(opts);
+    let summary = run.join();
+    assert_eq!(summary.evaluations, 60);
+    assert!(secure.join().is_ok());
+    // Plain HTTP/2 against a TLS server never gets through: the worker gives up, having done nothing.
+    let err = plain.join().unwrap_err().to_string();
+    assert!(err.contains("unreachable"), "{err}");
+}

@@ -315,6 +315,9 @@ impl TaskQueue {
         let t = s.tasks.get_mut(&task_id).expect("checked above");
         t.phase = TaskPhase::Done;
         s.stats.completed += 1;
+        // The reporting worker has a free slot now: a lease of its that found it full may be
+        // waiting for exactly this.
+        self.work.notify_waiters();
         if let Some(tx) = &s.completions {
             // The search may have given up on the batch (shutdown); nothing to deliver to then.
             let _ = tx.send(completion);

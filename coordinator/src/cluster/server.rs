@@ -11,6 +11,7 @@ use amorph_proto::MAX_MESSAGE_BYTES;
 use amorph_proto::v1::evaluation_coordinator_server::EvaluationCoordinatorServer;
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
+use tokio_stream::StreamExt;
 use tokio_stream::wrappers::TcpListenerStream;
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::{Identity, Server, ServerTlsConfig};
@@ -156,8 +157,15 @@ pub async fn start(
         let shutdown = async move {
             let _ = stopped.wait_for(|s| *s).await;
         };
+        // Serving a listener we bound ourselves bypasses the builder's TCP options: switch Nagle
+        // off here, or a lease and a report in flight together stall on delayed ACKs.
+        let incoming = TcpListenerStream::new(listener).map(|stream| {
+            stream.inspect(|s| {
+                let _ = s.set_nodelay(true);
+            })
+        });
         if let Err(e) = router
-            .serve_with_incoming_shutdown(TcpListenerStream::new(listener), shutdown)
+            .serve_with_incoming_shutdown(incoming, shutdown)
             .await
         {
             warn!(error = %e, "gRPC server stopped with an error");
