@@ -14,6 +14,7 @@
 //!   exports/              fabrication files of the best design (STL, 3MF, VXA, SVG layers, PNG)
 //!   island-<i>-best.png   a render of each island's best design
 //!   progress_evaluations.png, progress_wall_time.png, profile.png (beam)   plots
+//!   animation.gif, trajectory.png, trajectory.csv   robot task: the best robot walking
 //!   report.md, report.html     the run report: config, pictures, the paper-style table, links
 //! ```
 
@@ -154,6 +155,18 @@ impl ResultWriter {
         let exports =
             amorph::export::write_fabrication_files(&self.dir.join("exports"), &grid, scene)?;
         let island_pictures = self.island_pictures(summary, scene)?;
+        if let (Scene::Locomotion(robot), Some(_)) = (scene, best.outcome.locomotion_metrics()) {
+            // One more simulation of the best robot, recorded densely; a failure here costs the
+            // pictures, not the run's other results.
+            if let Err(e) = amorph::export::write_locomotion_pictures(
+                &self.dir,
+                &best.genome,
+                robot,
+                summary.dims,
+            ) {
+                tracing::warn!(error = %e, "robot animation and trajectory not written");
+            }
+        }
         self.plots(summary, best)?;
         let common = serde_json::json!({
             "name": self.config.raw.name,
@@ -237,11 +250,17 @@ impl ResultWriter {
 
         report.push(Block::Heading("Best design".into()));
         let mut pictures = vec![picture("exports/design.png", "best design, isometric view")];
-        if exists("profile.png") {
-            pictures.push(picture(
-                "profile.png",
-                "deflected top surface against the target",
-            ));
+        for (file, caption) in [
+            ("profile.png", "deflected top surface against the target"),
+            ("animation.gif", "the best robot walking (10x slow motion)"),
+            (
+                "trajectory.png",
+                "centre of mass: x against time, and the path seen from above",
+            ),
+        ] {
+            if exists(file) {
+                pictures.push(picture(file, caption));
+            }
         }
         report.push(Block::Pictures(pictures));
         report.push(Block::Heading("Best design of each island".into()));
@@ -285,6 +304,7 @@ impl ResultWriter {
             "population.json",
             "best_voxels.json",
             "profile.csv",
+            "trajectory.csv",
             "summary.json",
             "summary.md",
         ]

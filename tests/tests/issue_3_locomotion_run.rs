@@ -84,6 +84,16 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
         &format!("{speed:.3} %"),
     );
     assert!(md.contains("| 3.38 % |"), "paper value missing");
+    // The best robot's walk and trajectory are written and shown.
+    for picture in ["animation.gif", "trajectory.png"] {
+        assert!(
+            md.contains(&format!("](<{picture}>)")),
+            "{picture} not shown"
+        );
+    }
+    let trajectory = std::fs::read_to_string(config.run_dir().join("trajectory.csv")).unwrap();
+    // Header, settling checks, the settled sample, 20 samples per cycle for 2 cycles.
+    assert!(trajectory.lines().count() >= 1 + 1 + 1 + 40);
 }
 
 #[test]

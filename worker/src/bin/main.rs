@@ -1,5 +1,6 @@
 //! `worker evaluate`: evaluates a saved genome in a scene at a resolution and prints the outcome.
-//! `worker export`: writes a saved genome's fabrication files (STL, VXA, SVG layers).
+//! `worker export`: writes a saved genome's fabrication files (STL, VXA, SVG layers) and, for a
+//! robot, its animation and trajectory.
 
 use std::path::PathBuf;
 
@@ -48,7 +49,8 @@ enum Command {
         design: Design,
     },
     /// Writes the fabrication files of a genome at a resolution: one STL per material (mm),
-    /// design.3mf, design.vxa for VoxCAD/Voxelyze, design.png and one SVG per laser-cut layer.
+    /// design.3mf, design.vxa for VoxCAD/Voxelyze, design.png and one SVG per laser-cut layer;
+    /// for a robot also animation.gif and trajectory.png/.csv (it is simulated once more).
     Export {
         #[command(flatten)]
         design: Design,
@@ -84,8 +86,14 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                 .validate(scene.limits(), scene.palette().len())
                 .context("the genome does not fit the scene")?;
             let grid = scene.design(&genome, dims);
-            let files = amorph::export::write_fabrication_files(&out, &grid, &scene)
+            let mut files = amorph::export::write_fabrication_files(&out, &grid, &scene)
                 .with_context(|| format!("writing into {}", out.display()))?;
+            if let Scene::Locomotion(robot) = &scene {
+                files.extend(
+                    amorph::export::write_locomotion_pictures(&out, &genome, robot, dims)
+                        .with_context(|| format!("animating the robot into {}", out.display()))?,
+                );
+            }
             println!(
                 "{} voxels; wrote {} files into {}",
                 grid.filled_count(),
