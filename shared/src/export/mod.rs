@@ -9,6 +9,7 @@ pub mod recording;
 pub mod render;
 pub mod report;
 pub mod scaling;
+pub mod smooth;
 pub mod stl;
 pub mod threemf;
 pub mod trajectory;
@@ -22,6 +23,7 @@ pub use recording::{LocomotionRecording, RecordingOptions, Sample, record_locomo
 pub use render::{Image, render_isometric};
 pub use report::{Block, Link, Picture, Report};
 pub use scaling::{PhysicalBuild, dynamic_actuation_force, equivalent_actuation_period};
+pub use smooth::{SampledField, isosurface, samples_per_voxel, smooth_material_meshes};
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use threemf::{package_3mf, write_3mf};
 pub use trajectory::{trajectory_csv, trajectory_plot};
@@ -98,6 +100,41 @@ pub fn write_fabrication_files(
     for z in 0..grid.dims().nz {
         let name = PathBuf::from(format!("layers/layer-{:03}.svg", z + 1));
         std::fs::write(dir.join(&name), layer_svg(grid, palette, voxel_size, z))?;
+        written.push(name);
+    }
+    Ok(written)
+}
+
+/// Writes `material-<i>-<name>-smooth.stl` per material present: the smooth surface of the
+/// genome's field (see [`smooth_material_meshes`]) sampled about `samples_longest` times along the
+/// design's longest side, in mm in the frame of the voxel STL files. Returns the files written,
+/// relative to `dir`.
+pub fn write_smooth_surfaces(
+    dir: &std::path::Path,
+    genome: &crate::genome::Genome,
+    scene: &crate::scene::Scene,
+    dims: crate::voxel::GridDims,
+    samples_longest: usize,
+) -> std::io::Result<Vec<std::path::PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let per_voxel = samples_per_voxel(dims, samples_longest);
+    let meshes = smooth_material_meshes(genome, scene, dims, per_voxel);
+    let mut written = Vec::new();
+    for (m, mesh) in meshes.iter().enumerate() {
+        if mesh.triangles.is_empty() {
+            continue;
+        }
+        let name = std::path::PathBuf::from(format!(
+            "material-{m}-{}-smooth.stl",
+            file_safe(&scene.palette().0[m].name)
+        ));
+        let mut file = std::io::BufWriter::new(std::fs::File::create(dir.join(&name))?);
+        write_binary_stl(
+            mesh,
+            &format!("amorph material {m}, smooth, {per_voxel} samples per voxel"),
+            &mut file,
+        )?;
+        std::io::Write::flush(&mut file)?;
         written.push(name);
     }
     Ok(written)

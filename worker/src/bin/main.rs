@@ -57,6 +57,11 @@ enum Command {
         /// Folder to write into (created if missing).
         #[arg(long)]
         out: PathBuf,
+        /// Also write material-<i>-<name>-smooth.stl: each material's region of the genome's
+        /// continuous field, meshed with about N samples along the longest side (rounded to a
+        /// whole number per voxel).
+        #[arg(long, value_name = "N")]
+        smooth: Option<usize>,
     },
 }
 
@@ -80,7 +85,11 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                 serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
             );
         }
-        Command::Export { design, out } => {
+        Command::Export {
+            design,
+            out,
+            smooth,
+        } => {
             let (genome, scene, dims) = design.load()?;
             genome
                 .validate(scene.limits(), scene.palette().len())
@@ -88,6 +97,14 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             let grid = scene.design(&genome, dims);
             let mut files = amorph::export::write_fabrication_files(&out, &grid, &scene)
                 .with_context(|| format!("writing into {}", out.display()))?;
+            if let Some(samples) = smooth {
+                files.extend(
+                    amorph::export::write_smooth_surfaces(&out, &genome, &scene, dims, samples)
+                        .with_context(|| {
+                            format!("writing smooth surfaces into {}", out.display())
+                        })?,
+                );
+            }
             if let Scene::Locomotion(robot) = &scene {
                 files.extend(
                     amorph::export::write_locomotion_pictures(&out, &genome, robot, dims)
