@@ -3,6 +3,7 @@
 
 pub mod animation;
 pub mod layers;
+mod merge;
 pub mod mesh;
 pub mod plot;
 pub mod recording;
@@ -32,8 +33,9 @@ pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 use crate::material::MaterialId;
 use crate::voxel::VoxelGrid;
 
-/// The closed surface of each material's voxels, in millimetres (index = material id); a material
-/// with no voxels gets an empty mesh.
+/// The closed surface of each material's voxels, in millimetres (index = material id), with
+/// coplanar faces merged into rectangles (no T-junctions; see `merge`); a material with no voxels
+/// gets an empty mesh.
 pub fn material_meshes_mm(
     grid: &VoxelGrid,
     material_count: usize,
@@ -42,7 +44,8 @@ pub fn material_meshes_mm(
     (0..material_count)
         .map(|m| {
             let id = MaterialId(m as u8);
-            boundary_mesh(grid, voxel_size, |cell| cell == Some(id)).scaled(1e3)
+            let surface = mesh::boundary_surface(grid, voxel_size, |cell| cell == Some(id));
+            merge::merged_mesh(&surface).scaled(1e3)
         })
         .collect()
 }
