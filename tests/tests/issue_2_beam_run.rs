@@ -3,6 +3,8 @@
 
 use amorph_tests::{run_locally, scratch_dir, small_beam_config};
 
+mod report_check;
+
 #[test]
 fn same_seed_gives_bit_identical_populations_on_1_2_and_3_threads() {
     let runs: Vec<_> = [1, 2, 3]
@@ -62,4 +64,21 @@ fn a_run_stops_at_its_evaluation_budget_and_writes_its_results() {
         .filter_map(|l| l.split(',').nth(5)?.parse().ok())
         .collect();
     assert!(best.windows(2).all(|w| w[1] >= w[0]), "{best:?}");
+
+    // Issue 6: the report shows the Table-III line of this run (its best RMS error, as
+    // summary.json has it) beside the paper's 0.10 % for the circular arc.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run_dir.join("summary.json")).unwrap())
+            .unwrap();
+    let rms = json["best_rms_percent"]
+        .as_f64()
+        .expect("an evaluated best");
+    let md = report_check::check_report(&run_dir, "circular\\_arc", &format!("{rms:.3} %"));
+    assert!(md.contains("| 0.100 % |"), "paper value missing");
+    for picture in ["profile.png", "exports/design.png", "island-1-best.png"] {
+        assert!(
+            md.contains(&format!("](<{picture}>)")),
+            "{picture} not shown"
+        );
+    }
 }

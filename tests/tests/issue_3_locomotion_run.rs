@@ -6,6 +6,8 @@ use std::path::Path;
 use amorph_coordinator::RunConfig;
 use amorph_tests::{run_locally, scratch_dir};
 
+mod report_check;
+
 /// A tiny walking-robot run: 4x4x4 designs, a short settle and two actuation cycles, so the test
 /// checks the plumbing (scene parsing, evaluation, outcomes, results) in seconds, not the physics
 /// (which `shared/tests/dynamics_*.rs` check against analytic references).
@@ -71,6 +73,27 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
     let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
     assert_eq!(summary["task"], "locomotion");
     assert_eq!(summary["evaluations"], 20);
+
+    // Issue 6: the report's Table-IV comparison holds this run's speed beside the paper's.
+    let speed = summary["speed_percent_body_length_per_cycle"]
+        .as_f64()
+        .expect("an evaluated best");
+    let md = report_check::check_report(
+        &config.run_dir(),
+        "speed (% body length per cycle)",
+        &format!("{speed:.3} %"),
+    );
+    assert!(md.contains("| 3.38 % |"), "paper value missing");
+    // The best robot's walk and trajectory are written and shown.
+    for picture in ["animation.gif", "trajectory.png"] {
+        assert!(
+            md.contains(&format!("](<{picture}>)")),
+            "{picture} not shown"
+        );
+    }
+    let trajectory = std::fs::read_to_string(config.run_dir().join("trajectory.csv")).unwrap();
+    // Header, settling checks, the settled sample, 20 samples per cycle for 2 cycles.
+    assert!(trajectory.lines().count() >= 1 + 1 + 1 + 40);
 }
 
 #[test]

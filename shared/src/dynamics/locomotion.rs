@@ -69,12 +69,38 @@ impl LocomotionOutcome {
     }
 }
 
+/// Where a locomotion simulation is when it calls its observer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LocomotionPhase {
+    /// After each settling check (every `settle.check_interval`).
+    Settling,
+    /// Settling has ended; actuation starts next.
+    Settled,
+    /// After sample `sample` (1-based) of `samples_per_cycle` in actuation cycle `cycle` (0-based).
+    Actuating { cycle: u32, sample: u32 },
+}
+
 /// Evaluates a design for forward locomotion. Deterministic bit for bit; never panics on a
 /// design (degenerate inputs become a status).
 pub fn simulate_locomotion(
     grid: &VoxelGrid,
     palette: &Palette,
     scene: &DynamicScene,
+) -> LocomotionOutcome {
+    simulate_locomotion_observed(grid, palette, scene, 1, &mut |_, _| {})
+}
+
+/// [`simulate_locomotion`] that also hands the simulation to `observer` at every settling check
+/// and `samples_per_cycle` times per actuation cycle (evenly in steps), for recordings such as a
+/// dense centre-of-mass trace or animation frames. The observer runs between chunks of steps,
+/// never inside the step loop, and the chunks add up to the same steps, so the outcome is bit
+/// for bit that of [`simulate_locomotion`].
+pub fn simulate_locomotion_observed(
+    grid: &VoxelGrid,
+    palette: &Palette,
+    scene: &DynamicScene,
+    samples_per_cycle: u32,
+    observer: &mut dyn FnMut(LocomotionPhase, &Simulation),
 ) -> LocomotionOutcome {
     let body = keep_largest_component(grid);
     let voxel_count = body.filled_count();
@@ -102,7 +128,13 @@ pub fn simulate_locomotion(
         dt: sim.dt(),
         ..LocomotionOutcome::failed(LocomotionStatus::Completed, voxel_count)
     };
-    let result = run(&mut sim, scene, &mut outcome);
+    let result = run(
+        &mut sim,
+        scene,
+        samples_per_cycle.max(1),
+        observer,
+        &mut outcome,
+    );
     outcome.steps = sim.steps();
     outcome.simulated_time = sim.time();
     if let Err(d) = result {
@@ -119,16 +151,20 @@ pub fn simulate_locomotion(
 fn run(
     sim: &mut Simulation,
     scene: &DynamicScene,
+    samples_per_cycle: u32,
+    observer: &mut dyn FnMut(LocomotionPhase, &Simulation),
     outcome: &mut LocomotionOutcome,
 ) -> Result<(), super::simulation::Divergence> {
     let rule = &scene.settle;
     while sim.time() < rule.max_time {
         let chunk = rule.check_interval.min(rule.max_time - sim.time());
         sim.run_for(chunk)?;
+        observer(LocomotionPhase::Settling, sim);
         if rule.still_speed > 0.0 && sim.max_speed() < rule.still_speed {
             break;
         }
     }
+    observer(LocomotionPhase::Settled, sim);
     outcome.settle_time = sim.time();
     let start = sim.centre_of_mass();
     let to_array = |c: Vec3| [c.x, c.y, c.z];
@@ -136,8 +172,16 @@ fn run(
     if let Some(actuation) = &scene.actuation {
         sim.start_actuation();
         let steps_per_cycle = (actuation.period / sim.dt()).round().max(1.0) as u64;
-        for _ in 0..scene.actuation_cycles {
-            sim.run_steps(steps_per_cycle)?;
+        let samples = u64::from(samples_per_cycle);
+        for cycle in 0..scene.actuation_cycles {
+            // Sample k ends at step round(k · steps / samples) of the cycle.
+            let mut done = 0;
+            for sample in 1..=samples_per_cycle {
+                let end = (u64::from(sample) * steps_per_cycle + samples / 2) / samples;
+                sim.run_steps(end - done)?;
+                done = end;
+                observer(LocomotionPhase::Actuating { cycle, sample }, sim);
+            }
             outcome
                 .centre_of_mass_trace
                 .push(to_array(sim.centre_of_mass()));

@@ -20,7 +20,10 @@ mod simulation;
 mod state;
 
 pub use error::{DynamicsError, Result};
-pub use locomotion::{LocomotionOutcome, LocomotionStatus, simulate_locomotion};
+pub use locomotion::{
+    LocomotionOutcome, LocomotionPhase, LocomotionStatus, simulate_locomotion,
+    simulate_locomotion_observed,
+};
 pub use math::{Mat3, Quat, Vec3};
 pub use scene::{
     Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, SettleRule, foam_palette,

@@ -57,12 +57,52 @@ struct Face {
 }
 
 /// The boundary of the voxels selected by `member` (a cell index → in the set), in metres with
-/// voxel size `voxel_size` and the grid's corner at the origin.
+/// voxel size `voxel_size` and the grid's corner at the origin: two triangles per voxel face.
 pub fn boundary_mesh(
     grid: &VoxelGrid,
     voxel_size: f64,
     member: impl Fn(Option<MaterialId>) -> bool,
 ) -> TriangleMesh {
+    let surface = boundary_surface(grid, voxel_size, member);
+    let mut mesh = TriangleMesh {
+        vertices: surface.vertices,
+        triangles: Vec::with_capacity(2 * surface.faces.len()),
+    };
+    for face in &surface.faces {
+        let v = face.vertices;
+        mesh.triangles.push([v[0], v[1], v[2]]);
+        mesh.triangles.push([v[0], v[2], v[3]]);
+    }
+    mesh
+}
+
+/// One exposed voxel face of a [`BoundarySurface`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SurfaceFace {
+    pub cell: [usize; 3],
+    /// The face's normal is +axis (`positive`) or −axis.
+    pub axis: usize,
+    pub positive: bool,
+    /// Corner vertices, counter-clockwise seen from outside, as [`face_corners`] orders them.
+    pub vertices: [u32; 4],
+}
+
+/// The boundary as voxel faces over shared vertices (metres), before triangulation.
+#[derive(Clone, Debug)]
+pub(super) struct BoundarySurface {
+    pub vertices: Vec<[f64; 3]>,
+    pub faces: Vec<SurfaceFace>,
+    /// Per vertex: whether its lattice point was split at a pinch (and the vertex moved off it).
+    pub pinched: Vec<bool>,
+    pub voxel_size: f64,
+}
+
+/// The faces and vertices of [`boundary_mesh`], pinches resolved.
+pub(super) fn boundary_surface(
+    grid: &VoxelGrid,
+    voxel_size: f64,
+    member: impl Fn(Option<MaterialId>) -> bool,
+) -> BoundarySurface {
     let dims = grid.dims();
     let n = [dims.nx, dims.ny, dims.nz];
     let inside = |c: [isize; 3]| {
@@ -157,6 +197,7 @@ pub fn boundary_mesh(
     let mut vertices_at_point: BTreeMap<usize, usize> = BTreeMap::new();
     let mut point_of_vertex = Vec::new();
     let mut mesh = TriangleMesh::default();
+    let mut surface_faces = Vec::with_capacity(faces.len());
     for (f, face) in faces.iter().enumerate() {
         let mut v = [0u32; 4];
         for (k, vk) in v.iter_mut().enumerate() {
@@ -176,11 +217,20 @@ pub fn boundary_mesh(
             }
             sum.1 += 1;
         }
-        mesh.triangles.push([v[0], v[1], v[2]]);
-        mesh.triangles.push([v[0], v[2], v[3]]);
+        let axis = (0..3)
+            .find(|&a| face.outside[a] != face.cell[a] as isize)
+            .unwrap_or(0);
+        surface_faces.push(SurfaceFace {
+            cell: face.cell,
+            axis,
+            positive: face.outside[axis] > face.cell[axis] as isize,
+            vertices: v,
+        });
     }
+    let mut pinched = vec![false; mesh.vertices.len()];
     for (v, position) in mesh.vertices.iter_mut().enumerate() {
         if vertices_at_point[&point_of_vertex[v]] > 1 {
+            pinched[v] = true;
             let (sum, count) = centre_sum[v];
             for a in 0..3 {
                 position[a] += PINCH_OFFSET * (sum[a] / count as f64 - position[a]);
@@ -188,7 +238,12 @@ pub fn boundary_mesh(
         }
         *position = position.map(|c| c * voxel_size);
     }
-    mesh
+    BoundarySurface {
+        vertices: mesh.vertices,
+        faces: surface_faces,
+        pinched,
+        voxel_size,
+    }
 }
 
 /// The four corners of a cell's face, counter-clockwise seen from outside: with (u, v) the next

@@ -1,29 +1,41 @@
 //! Fabrication exports of a design (paper §III-D and §IV-C): closed per-material surface meshes as
 //! binary STL and a multi-material 3MF for printing, VXA for VoxCAD/Voxelyze, and SVG laser-cut layers.
 
+pub mod animation;
 pub mod layers;
+mod merge;
 pub mod mesh;
 pub mod plot;
+pub mod recording;
 pub mod render;
+pub mod report;
 pub mod scaling;
+pub mod smooth;
 pub mod stl;
 pub mod threemf;
+pub mod trajectory;
 pub mod vxa;
 
+pub use animation::{AnimationError, AnimationOptions, animation_gif, write_locomotion_animation};
 pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
-pub use plot::{PlotSpec, Series, line_plot};
+pub use plot::{PlotSpec, Series, line_plot, line_plot_over};
+pub use recording::{LocomotionRecording, RecordingOptions, Sample, record_locomotion};
 pub use render::{Image, render_isometric};
+pub use report::{Block, Link, Picture, Report};
 pub use scaling::{PhysicalBuild, dynamic_actuation_force, equivalent_actuation_period};
+pub use smooth::{SampledField, isosurface, samples_per_voxel, smooth_material_meshes};
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use threemf::{package_3mf, write_3mf};
+pub use trajectory::{trajectory_csv, trajectory_plot};
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 
 use crate::material::MaterialId;
 use crate::voxel::VoxelGrid;
 
-/// The closed surface of each material's voxels, in millimetres (index = material id); a material
-/// with no voxels gets an empty mesh.
+/// The closed surface of each material's voxels, in millimetres (index = material id), with
+/// coplanar faces merged into rectangles (no T-junctions; see `merge`); a material with no voxels
+/// gets an empty mesh.
 pub fn material_meshes_mm(
     grid: &VoxelGrid,
     material_count: usize,
@@ -32,7 +44,8 @@ pub fn material_meshes_mm(
     (0..material_count)
         .map(|m| {
             let id = MaterialId(m as u8);
-            boundary_mesh(grid, voxel_size, |cell| cell == Some(id)).scaled(1e3)
+            let surface = mesh::boundary_surface(grid, voxel_size, |cell| cell == Some(id));
+            merge::merged_mesh(&surface).scaled(1e3)
         })
         .collect()
 }
@@ -93,6 +106,72 @@ pub fn write_fabrication_files(
         written.push(name);
     }
     Ok(written)
+}
+
+/// Writes `material-<i>-<name>-smooth.stl` per material present: the smooth surface of the
+/// genome's field (see [`smooth_material_meshes`]) sampled about `samples_longest` times along the
+/// design's longest side, in mm in the frame of the voxel STL files. Returns the files written,
+/// relative to `dir`.
+pub fn write_smooth_surfaces(
+    dir: &std::path::Path,
+    genome: &crate::genome::Genome,
+    scene: &crate::scene::Scene,
+    dims: crate::voxel::GridDims,
+    samples_longest: usize,
+) -> std::io::Result<Vec<std::path::PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let per_voxel = samples_per_voxel(dims, samples_longest);
+    let meshes = smooth_material_meshes(genome, scene, dims, per_voxel);
+    let mut written = Vec::new();
+    for (m, mesh) in meshes.iter().enumerate() {
+        if mesh.triangles.is_empty() {
+            continue;
+        }
+        let name = std::path::PathBuf::from(format!(
+            "material-{m}-{}-smooth.stl",
+            file_safe(&scene.palette().0[m].name)
+        ));
+        let mut file = std::io::BufWriter::new(std::fs::File::create(dir.join(&name))?);
+        write_binary_stl(
+            mesh,
+            &format!("amorph material {m}, smooth, {per_voxel} samples per voxel"),
+            &mut file,
+        )?;
+        std::io::Write::flush(&mut file)?;
+        written.push(name);
+    }
+    Ok(written)
+}
+
+/// Writes the pictures of a walking robot into `dir` from one extra simulation of it:
+/// `animation.gif` (the robot moving), `trajectory.png` (its centre of mass against time and seen
+/// from above) and `trajectory.csv` (the samples). Returns the files written, relative to `dir`.
+pub fn write_locomotion_pictures(
+    dir: &std::path::Path,
+    genome: &crate::genome::Genome,
+    scene: &crate::locomotion::LocomotionScene,
+    dims: crate::voxel::GridDims,
+) -> std::io::Result<Vec<std::path::PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let mut gif = Vec::new();
+    let recording = write_locomotion_animation(
+        genome,
+        scene,
+        dims,
+        RecordingOptions::default(),
+        AnimationOptions::default(),
+        &mut gif,
+    )
+    .map_err(std::io::Error::other)?;
+    std::fs::write(dir.join("animation.gif"), gif)?;
+    let png = trajectory_plot(&recording)
+        .to_png()
+        .map_err(std::io::Error::other)?;
+    std::fs::write(dir.join("trajectory.png"), png)?;
+    std::fs::write(dir.join("trajectory.csv"), trajectory_csv(&recording))?;
+    Ok(["animation.gif", "trajectory.png", "trajectory.csv"]
+        .map(std::path::PathBuf::from)
+        .to_vec())
 }
 
 fn file_safe(name: &str) -> String {

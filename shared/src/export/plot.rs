@@ -38,6 +38,16 @@ const GRID: [u8; 3] = [225, 225, 225];
 /// Draws the series on one pair of axes. Non-finite points (and non-positive ones on a log
 /// axis) are skipped.
 pub fn line_plot(spec: &PlotSpec, series: &[Series]) -> Image {
+    line_plot_over(spec, series, [None, None])
+}
+
+/// [`line_plot`] whose x and/or y axis covers at least the given data range (then rounded out to
+/// ticks), e.g. to give both axes of a map the same scale.
+pub fn line_plot_over(
+    spec: &PlotSpec,
+    series: &[Series],
+    at_least: [Option<(f64, f64)>; 2],
+) -> Image {
     let mut image = Image {
         width: WIDTH,
         height: HEIGHT,
@@ -60,6 +70,11 @@ pub fn line_plot(spec: &PlotSpec, series: &[Series]) -> Image {
             .iter()
             .map(|p| p[a])
             .fold(f64::NEG_INFINITY, f64::max);
+        let log = [spec.log_x, spec.log_y][a];
+        let (lo, hi) = match at_least[a] {
+            Some((l, h)) => (lo.min(map(l, log)), hi.max(map(h, log))),
+            None => (lo, hi),
+        };
         if !lo.is_finite() {
             (0.0, 1.0)
         } else if hi - lo < 1e-12 * lo.abs().max(1e-300) {
@@ -207,7 +222,7 @@ fn square(image: &mut Image, p: [f64; 2], half: f64, c: [u8; 3]) {
 }
 
 /// A line `thickness` pixels wide (stepped at half-pixel spacing).
-fn line(image: &mut Image, a: [f64; 2], b: [f64; 2], c: [u8; 3], thickness: usize) {
+pub(super) fn line(image: &mut Image, a: [f64; 2], b: [f64; 2], c: [u8; 3], thickness: usize) {
     let steps = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()) * 2.0)
         .ceil()
         .max(1.0) as usize;
@@ -223,12 +238,12 @@ fn line(image: &mut Image, a: [f64; 2], b: [f64; 2], c: [u8; 3], thickness: usiz
     }
 }
 
-fn text_width(s: &str) -> f64 {
+pub(super) fn text_width(s: &str) -> f64 {
     (s.chars().count() * 6 * SCALE) as f64
 }
 
 /// Draws `s` with its top-left corner at (x, y); characters without a glyph are blank.
-fn text(image: &mut Image, s: &str, x: f64, y: f64, c: [u8; 3]) {
+pub(super) fn text(image: &mut Image, s: &str, x: f64, y: f64, c: [u8; 3]) {
     for (i, ch) in s.chars().enumerate() {
         let rows = glyph(ch.to_ascii_uppercase());
         let left = x as i64 + (i * 6 * SCALE) as i64;

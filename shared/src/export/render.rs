@@ -125,7 +125,7 @@ pub fn render_isometric(grid: &VoxelGrid, palette: &Palette, voxel_px: f64) -> I
 
 /// Fills a convex quad, drawing pixels within half a pixel of its border in `edge` so voxels
 /// stay distinguishable.
-fn fill_quad(image: &mut Image, q: [[f64; 2]; 4], fill: [u8; 3], edge: [u8; 3]) {
+pub(super) fn fill_quad(image: &mut Image, q: [[f64; 2]; 4], fill: [u8; 3], edge: [u8; 3]) {
     let lo = [0, 1].map(|a| q.iter().map(|p| p[a]).fold(f64::INFINITY, f64::min));
     let hi = [0, 1].map(|a| q.iter().map(|p| p[a]).fold(f64::NEG_INFINITY, f64::max));
     let area2: f64 = (0..4)

@@ -1,6 +1,7 @@
 //! `worker --connect URL`: a stateless cluster worker that pulls tasks from a coordinator.
 //! `worker evaluate`: evaluates a saved genome in a scene at a resolution and prints the outcome.
-//! `worker export`: writes a saved genome's fabrication files (STL, VXA, SVG layers).
+//! `worker export`: writes a saved genome's fabrication files (STL, VXA, SVG layers) and, for a
+//! robot, its animation and trajectory.
 
 use std::path::PathBuf;
 
@@ -95,13 +96,19 @@ enum Command {
         design: Design,
     },
     /// Writes the fabrication files of a genome at a resolution: one STL per material (mm),
-    /// design.3mf, design.vxa for VoxCAD/Voxelyze, design.png and one SVG per laser-cut layer.
+    /// design.3mf, design.vxa for VoxCAD/Voxelyze, design.png and one SVG per laser-cut layer;
+    /// for a robot also animation.gif and trajectory.png/.csv (it is simulated once more).
     Export {
         #[command(flatten)]
         design: Design,
         /// Folder to write into (created if missing).
         #[arg(long)]
         out: PathBuf,
+        /// Also write material-<i>-<name>-smooth.stl: each material's region of the genome's
+        /// continuous field, meshed with about N samples along the longest side (rounded to a
+        /// whole number per voxel).
+        #[arg(long, value_name = "N")]
+        smooth: Option<usize>,
     },
 }
 
@@ -128,14 +135,32 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                 serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
             );
         }
-        Command::Export { design, out } => {
+        Command::Export {
+            design,
+            out,
+            smooth,
+        } => {
             let (genome, scene, dims) = design.load()?;
             genome
                 .validate(scene.limits(), scene.palette().len())
                 .context("the genome does not fit the scene")?;
             let grid = scene.design(&genome, dims);
-            let files = amorph::export::write_fabrication_files(&out, &grid, &scene)
+            let mut files = amorph::export::write_fabrication_files(&out, &grid, &scene)
                 .with_context(|| format!("writing into {}", out.display()))?;
+            if let Some(samples) = smooth {
+                files.extend(
+                    amorph::export::write_smooth_surfaces(&out, &genome, &scene, dims, samples)
+                        .with_context(|| {
+                            format!("writing smooth surfaces into {}", out.display())
+                        })?,
+                );
+            }
+            if let Scene::Locomotion(robot) = &scene {
+                files.extend(
+                    amorph::export::write_locomotion_pictures(&out, &genome, robot, dims)
+                        .with_context(|| format!("animating the robot into {}", out.display()))?,
+                );
+            }
             println!(
                 "{} voxels; wrote {} files into {}",
                 grid.filled_count(),
