@@ -17,11 +17,11 @@ use std::time::{Duration, Instant};
 
 use amorph::genome::Genome;
 use amorph::voxel::GridDims;
+use amorph_coordinator::RunConfig;
 use amorph_coordinator::cluster::{self, ClusterEvaluator, QueueRules, ServerOptions, TaskQueue};
 use amorph_coordinator::evaluator::{Evaluator, Task};
 use amorph_coordinator::ids::TaskId;
 use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
-use amorph_coordinator::RunConfig;
 use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
 
 const WORKER_ENV: &str = "AMORPH_BENCH_WORKER";
@@ -124,10 +124,7 @@ fn capacity() {
             }
         }
         let rate = batch as f64 / best;
-        println!(
-            "| {workers} | {slots} | {rate:.0} | {:.1} |",
-            1e6 / rate
-        );
+        println!("| {workers} | {slots} | {rate:.0} | {:.1} |", 1e6 / rate);
         queue.finish();
         for child in &mut children {
             let _ = child.wait();
