@@ -131,6 +131,8 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
             opts.token = token.clone();
             opts.mode = EvaluationMode::Physics;
             opts.exit_when_finished = true;
+            // The coordinator waits only briefly for its own workers when it stops.
+            opts.grace = Duration::from_secs(2);
             if server_options.tls.is_some() {
                 opts.ca_cert = cluster_config.tls_cert.clone();
                 opts.tls_domain = Some(
@@ -153,9 +155,11 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     };
     let result = run(config, &mut evaluator, &ctx);
 
-    // Wind down: workers learn the run finished on their next call; give them a moment to say
-    // goodbye, then stop the server either way.
-    queue.finish();
+    // Wind down. Only a run that ended tells workers it finished (so they exit): after a stop or
+    // a failure the run is not over, and external workers should wait to serve its resumption.
+    if result.is_ok() {
+        queue.finish();
+    }
     let _ = stop_workers.send(true);
     runtime.block_on(async {
         for worker in workers {

@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use amorph_coordinator::RunConfig;
 use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
 use amorph_coordinator::progress::Progress;
+use amorph_coordinator::store::RunStore;
 use anyhow::Context;
 use clap::Parser;
 use tracing_subscriber::EnvFilter;
@@ -17,12 +18,19 @@ use tracing_subscriber::EnvFilter;
 #[command(version, about)]
 struct Cli {
     /// The run configuration (TOML); see configs/ for examples.
-    #[arg(long)]
-    config: PathBuf,
+    #[arg(long, required_unless_present = "health_check")]
+    config: Option<PathBuf>,
     /// Continue the run in <results_dir>/<name>/run.sqlite (after a crash or Ctrl-C). The result is
     /// bit-identical to a run that was never interrupted.
-    #[arg(long, conflicts_with = "fresh")]
+    #[arg(long, conflicts_with_all = ["fresh", "resume_if_present"])]
     resume: bool,
+    /// Resume if the run store exists, else start the run: for containers that may be restarted.
+    #[arg(long, conflicts_with = "fresh")]
+    resume_if_present: bool,
+    /// Only ask the coordinator at this URL whether it is serving (gRPC health), exit 0 if so: the
+    /// container health check, which has no shell or curl to use.
+    #[arg(long, value_name = "URL", conflicts_with = "config")]
+    health_check: Option<String>,
     /// Delete an existing run store of this config and start over.
     #[arg(long)]
     fresh: bool,
@@ -49,21 +57,27 @@ fn main() -> std::process::ExitCode {
 }
 
 fn try_main(cli: Cli) -> anyhow::Result<()> {
+    if let Some(url) = &cli.health_check {
+        return health_check(url);
+    }
     tracing_subscriber::fmt()
         .with_env_filter(
             EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(&cli.log)),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
-    let config = RunConfig::load(&cli.config)?;
+    let config = RunConfig::load(cli.config.as_deref().expect("clap requires --config"))?;
     let shutdown = Arc::new(AtomicBool::new(false));
     stop_on_signal(shutdown.clone());
     let (tx, rx) = std::sync::mpsc::channel();
     let options = JobOptions {
-        store: match (cli.resume, cli.fresh) {
-            (true, _) => StoreMode::Resume,
-            (false, true) => StoreMode::Fresh,
-            (false, false) => StoreMode::New,
+        store: if cli.resume || (cli.resume_if_present && RunStore::path_for(&config).exists()) {
+            StoreMode::Resume
+        } else if cli.fresh {
+            StoreMode::Fresh
+        } else {
+            StoreMode::New
         },
         listen: cli.listen,
         local_workers: cli.local_workers,
@@ -130,4 +144,32 @@ fn stop_on_signal(shutdown: Arc<AtomicBool>) {
         eprintln!("coordinator: stopping (the run store keeps every finished evaluation)");
         shutdown.store(true, Ordering::Relaxed);
     });
+}
+
+fn health_check(url: &str) -> anyhow::Result<()> {
+    use tonic_health::pb::health_check_response::ServingStatus;
+    use tonic_health::pb::{HealthCheckRequest, health_client::HealthClient};
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()?;
+    runtime.block_on(async {
+        let channel = tonic::transport::Endpoint::from_shared(url.to_owned())?
+            .connect_timeout(std::time::Duration::from_secs(2))
+            .connect()
+            .await
+            .with_context(|| format!("cannot reach {url}"))?;
+        let reply = HealthClient::new(channel)
+            .check(HealthCheckRequest {
+                service: "amorph.v1.EvaluationCoordinator".into(),
+            })
+            .await
+            .with_context(|| format!("health check of {url}"))?
+            .into_inner();
+        anyhow::ensure!(
+            reply.status == ServingStatus::Serving as i32,
+            "{url} is not serving (status {})",
+            reply.status
+        );
+        Ok(())
+    })
 }

@@ -1,0 +1,133 @@
+#!/usr/bin/env bash
+# Fault tests of the docker-compose cluster (issue 5), run by .ci/run. Each scenario brings up one
+# coordinator and two worker containers on a short beam run, breaks something mid-run, and checks
+# that the final population is byte-identical to the same run done in one process on the host:
+#   plain      nothing breaks
+#   kill       one worker container is killed (docker kill)
+#   partition  one worker is cut off the network, then reconnected (leases expire, it rejoins)
+#   restart    the coordinator container is restarted (it resumes from its run store)
+# Every container and network is removed on exit, also when a scenario fails.
+#
+#   deploy/fault-tests.sh [scenario...]     (default: all; AMORPH_PROFILE=release for release binaries)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$root"
+compose() { "$root/deploy/compose.sh" -f "$root/deploy/docker-compose.yml" "$@"; }
+profile="${AMORPH_PROFILE:-debug}"
+scenarios=("$@")
+[ ${#scenarios[@]} -gt 0 ] || scenarios=(plain kill partition restart)
+
+work="$(mktemp -d /tmp/amorph-fault.XXXXXX)"
+export AMORPH_TOKEN="fault-$$" AMORPH_UID="$(id -u)" AMORPH_GID="$(id -g)"
+export AMORPH_CONFIG="$work/run.toml"
+projects=()
+cleanup() {
+  local status=$?
+  for p in "${projects[@]}"; do
+    AMORPH_RESULTS=/tmp compose -p "$p" down --remove-orphans --timeout 1 >/dev/null 2>&1 || true
+  done
+  if [ $status -eq 0 ]; then rm -rf "$work"; else echo "fault-tests: FAILED (work folder kept: $work)" >&2; fi
+}
+trap cleanup EXIT
+log() { echo "fault-tests: $*"; }
+
+# A beam run long enough to break things in the middle (~0.3 s per evaluation, 2 workers).
+cat > "$AMORPH_CONFIG" <<'TOML'
+name = "ft"
+seed = 5
+[search]
+population = 10
+islands = 2
+children_per_epoch = 6
+initial_points = 20
+[search.migration]
+interval = 2
+[budget]
+evaluations = 360
+[resolution]
+levels = [[12, 40, 12]]
+[cluster]
+heartbeat_ms = 200
+lease_ms = 2000
+worker_timeout_ms = 1000
+[scene]
+kind = "beam"
+target = "circular_arc"
+TOML
+
+"$root/deploy/stage.sh" "$profile" >/dev/null
+AMORPH_RESULTS=/tmp compose -p amorphft build >/dev/null 2>&1 || AMORPH_RESULTS=/tmp compose -p amorphft build
+log "images built ($profile binaries)"
+
+mkdir -p "$work/reference"
+start=$(date +%s)
+(cd "$work/reference" && "$root/target/$profile/coordinator" --config "$AMORPH_CONFIG" --local-workers 2 >/dev/null 2>"$work/reference/log")
+reference="$work/reference/results/ft/population.json"
+log "reference run in one process: $(( $(date +%s) - start )) s"
+
+evaluations() {
+  python3 - "$1" <<'PY'
+import sqlite3, sys
+try:
+    print(sqlite3.connect(sys.argv[1], timeout=5).execute("select count(*) from evaluation").fetchone()[0])
+except Exception:
+    print(0)
+PY
+}
+
+wait_for_evaluations() { # store count timeout
+  local deadline=$(( $(date +%s) + $3 ))
+  until [ "$(evaluations "$1")" -ge "$2" ]; do
+    [ "$(date +%s)" -lt "$deadline" ] || { echo "fewer than $2 evaluations after $3 s" >&2; return 1; }
+    sleep 0.2
+  done
+}
+
+run_scenario() {
+  local name="$1" project="amorphft${1}$$" dir="$work/$1"
+  projects+=("$project")
+  mkdir -p "$dir/results"
+  export AMORPH_RESULTS="$dir/results"
+  local start; start=$(date +%s)
+  compose -p "$project" up -d --scale worker=2 >/dev/null 2>&1
+  local coordinator workers store="$dir/results/ft/run.sqlite"
+  coordinator="$(compose -p "$project" ps -q coordinator)"
+  mapfile -t workers < <(compose -p "$project" ps -q worker)
+  [ ${#workers[@]} -eq 2 ] || { echo "$name: expected 2 workers, got ${#workers[@]}" >&2; return 1; }
+  case "$name" in
+    plain) ;;
+    kill)
+      wait_for_evaluations "$store" 60 180
+      docker kill "${workers[0]}" >/dev/null
+      ;;
+    partition)
+      wait_for_evaluations "$store" 60 180
+      local net="${project}_default"
+      docker network disconnect -f "$net" "${workers[0]}"
+      sleep 4 # longer than the lease (2 s) and the worker timeout (1 s)
+      docker network connect "$net" "${workers[0]}"
+      ;;
+    restart)
+      wait_for_evaluations "$store" 60 180
+      docker restart -t 5 "$coordinator" >/dev/null
+      ;;
+    *) echo "unknown scenario $name" >&2; return 2 ;;
+  esac
+  local code; code="$(timeout 600 docker wait "$coordinator")"
+  if [ "$code" != 0 ]; then
+    compose -p "$project" logs --tail 30 >&2
+    echo "$name: coordinator exited with $code" >&2
+    return 1
+  fi
+  if ! cmp -s "$reference" "$dir/results/ft/population.json"; then
+    echo "$name: final population differs from the in-process run" >&2
+    return 1
+  fi
+  local stored; stored="$(evaluations "$store")"
+  [ "$stored" -eq 360 ] || { echo "$name: $stored evaluations stored, expected 360" >&2; return 1; }
+  compose -p "$project" down --remove-orphans --timeout 1 >/dev/null 2>&1
+  log "$name: bit-identical, 360 evaluations stored, $(( $(date +%s) - start )) s"
+}
+
+for s in "${scenarios[@]}"; do run_scenario "$s"; done
+log "all passed: ${scenarios[*]}"
