@@ -8,6 +8,24 @@ pub mod pool;
 pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
 pub use pool::{EvaluationMode, evaluate_caught};
 
+/// Resolves at the first Ctrl-C or SIGTERM (how a terminal, docker, Kubernetes and Slurm all ask a
+/// process to stop).
+pub async fn termination() {
+    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+    let terminated = async {
+        match term.as_mut() {
+            Some(t) => {
+                t.recv().await;
+            }
+            None => std::future::pending().await,
+        }
+    };
+    tokio::select! {
+        _ = tokio::signal::ctrl_c() => {}
+        _ = terminated => {}
+    }
+}
+
 use std::path::Path;
 
 use amorph::genome::Genome;

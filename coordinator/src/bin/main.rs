@@ -125,22 +125,7 @@ fn stop_on_signal(shutdown: Arc<AtomicBool>) {
         else {
             return;
         };
-        rt.block_on(async {
-            let mut term =
-                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
-            let terminated = async {
-                match term.as_mut() {
-                    Some(t) => {
-                        t.recv().await;
-                    }
-                    None => std::future::pending().await,
-                }
-            };
-            tokio::select! {
-                _ = tokio::signal::ctrl_c() => {}
-                _ = terminated => {}
-            }
-        });
+        rt.block_on(amorph_worker::termination());
         eprintln!("coordinator: stopping (the run store keeps every finished evaluation)");
         shutdown.store(true, Ordering::Relaxed);
     });

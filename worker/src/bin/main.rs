@@ -219,20 +219,7 @@ fn serve(c: Connect) -> anyhow::Result<()> {
     let summary = runtime.block_on(async move {
         let (stop, stop_rx) = tokio::sync::watch::channel(false);
         tokio::spawn(async move {
-            let mut term =
-                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
-            let terminated = async {
-                match term.as_mut() {
-                    Some(t) => {
-                        t.recv().await;
-                    }
-                    None => std::future::pending().await,
-                }
-            };
-            tokio::select! {
-                _ = tokio::signal::ctrl_c() => {}
-                _ = terminated => {}
-            }
+            amorph_worker::termination().await;
             eprintln!(
                 "worker: stopping (finishing running evaluations, then handing back the rest)"
             );
