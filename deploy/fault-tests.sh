@@ -84,7 +84,8 @@ wait_for_evaluations() { # store count timeout
 }
 
 run_scenario() {
-  local name="$1" project="amorphft${1}$$" dir="$work/$1"
+  runs=$(( ${runs:-0} + 1 ))
+  local name="$1" project="amorphft${1}${runs}x$$" dir="$work/$1-$runs"
   projects+=("$project")
   mkdir -p "$dir/results"
   export AMORPH_RESULTS="$dir/results"

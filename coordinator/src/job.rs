@@ -14,7 +14,7 @@ use tracing::{info, warn};
 use crate::cluster::{self, ClusterEvaluator, ServerOptions, TaskQueue};
 use crate::config::RunConfig;
 use crate::progress::Progress;
-use crate::run::{RunContext, RunError, RunSummary, run};
+use crate::run::{RunContext, RunError, RunSummary, StopReason, run};
 use crate::store::{RunStore, StoreError};
 
 /// How to start a run store.
@@ -157,7 +157,11 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
 
     // Wind down. Only a run that ended tells workers it finished (so they exit): after a stop or
     // a failure the run is not over, and external workers should wait to serve its resumption.
-    if result.is_ok() {
+    // A run stopped at an epoch boundary returns Ok with `StopReason::Shutdown`: not finished either.
+    if result
+        .as_ref()
+        .is_ok_and(|summary| summary.stop != StopReason::Shutdown)
+    {
         queue.finish();
     }
     let _ = stop_workers.send(true);

@@ -113,6 +113,9 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         summary.stop,
         config.run_dir().display()
     );
+    if summary.stop == amorph_coordinator::StopReason::Shutdown {
+        println!("stopped before its budget: continue it with --resume");
+    }
     Ok(())
 }
 
