@@ -60,11 +60,6 @@ pub trait Evaluator {
     }
 }
 
-/// Evaluates one task exactly as a worker does (a panic in the physics becomes a failed outcome).
-pub fn evaluate_task(scene: &Scene, task: &Task) -> Outcome {
-    amorph_worker::evaluate_caught(&task.genome, scene, task.dims)
-}
-
 /// Evaluates on threads of this process, one evaluation per thread at a time.
 #[derive(Debug)]
 pub struct LocalEvaluator {
@@ -107,7 +102,11 @@ impl Evaluator for LocalEvaluator {
                             let started = std::time::Instant::now();
                             let completion = Completion {
                                 slot: i,
-                                outcome: evaluate_task(scene, task),
+                                outcome: amorph_worker::evaluate_caught(
+                                    &task.genome,
+                                    scene,
+                                    task.dims,
+                                ),
                                 worker: "local".into(),
                                 wall_seconds: started.elapsed().as_secs_f64(),
                             };

@@ -478,34 +478,19 @@ fn config_text(config: &RunConfig) -> String {
 /// The first key (dotted) whose value differs between two configs, ignoring `budget` (a run may
 /// be extended) and `cluster` (how workers connect never changes a result).
 fn first_difference(a: &toml::Table, b: &toml::Table) -> Option<String> {
-    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
-    keys.sort();
-    keys.dedup();
-    for key in keys {
-        if key == "budget" || key == "cluster" {
-            continue;
-        }
-        match (a.get(key), b.get(key)) {
-            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
-                if let Some(inner) = first_difference_all(x, y) {
-                    return Some(format!("{key}.{inner}"));
-                }
-            }
-            (x, y) if x != y => return Some(key.clone()),
-            _ => {}
-        }
-    }
-    None
+    first_difference_except(a, b, &["budget", "cluster"])
 }
 
-fn first_difference_all(a: &toml::Table, b: &toml::Table) -> Option<String> {
+/// The first key (dotted, in sorted order) whose value differs, skipping top-level `ignored` keys.
+fn first_difference_except(a: &toml::Table, b: &toml::Table, ignored: &[&str]) -> Option<String> {
     let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
     keys.sort();
     keys.dedup();
     keys.into_iter()
+        .filter(|key| !ignored.contains(&key.as_str()))
         .find_map(|key| match (a.get(key), b.get(key)) {
             (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
-                first_difference_all(x, y).map(|inner| format!("{key}.{inner}"))
+                first_difference_except(x, y, &[]).map(|inner| format!("{key}.{inner}"))
             }
             (x, y) if x != y => Some(key.clone()),
             _ => None,

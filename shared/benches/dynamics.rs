@@ -65,12 +65,11 @@ fn bench_blocks(c: &mut Criterion) {
     group.finish();
 }
 
-fn bench_passes(c: &mut Criterion) {
-    let mut group = c.benchmark_group("dynamics_pass_10x10x10");
-    group.throughput(Throughput::Elements(1000));
-    let full = speed_block(10);
+/// The pass sets timed one by one (criterion and the `min` table use the same list): the whole
+/// scene, then each pass alone with the integration every step needs.
+fn pass_cases(full: &Simulation) -> Vec<(&'static str, Vec<Pass>)> {
     let links = |damped, actuated| Pass::Links { damped, actuated };
-    let cases: Vec<(&str, Vec<Pass>)> = vec![
+    vec![
         ("all_passes", full.passes().to_vec()),
         ("integrate_only", vec![Pass::Integrate]),
         ("links_plain", vec![links(false, false), Pass::Integrate]),
@@ -81,8 +80,14 @@ fn bench_passes(c: &mut Criterion) {
         ),
         ("gravity", vec![Pass::Gravity, Pass::Integrate]),
         ("floor_friction", vec![Pass::Floor, Pass::Integrate]),
-    ];
-    for (name, passes) in cases {
+    ]
+}
+
+fn bench_passes(c: &mut Criterion) {
+    let mut group = c.benchmark_group("dynamics_pass_10x10x10");
+    group.throughput(Throughput::Elements(1000));
+    let full = speed_block(10);
+    for (name, passes) in pass_cases(&full) {
         let mut sim = full.clone();
         sim.set_passes(passes);
         group.bench_function(name, |b| b.iter(|| black_box(sim.step())));
@@ -101,7 +106,16 @@ fn bench_passes(c: &mut Criterion) {
         &DynamicScene::free_space(0.01),
     )
     .unwrap();
-    assert_eq!(off.passes(), &[links(false, false), Pass::Integrate]);
+    assert_eq!(
+        off.passes(),
+        &[
+            Pass::Links {
+                damped: false,
+                actuated: false
+            },
+            Pass::Integrate
+        ]
+    );
     group.bench_function("scene_everything_off", |b| b.iter(|| black_box(off.step())));
     group.finish();
 }
@@ -122,20 +136,7 @@ fn min_step_time(sim: &mut Simulation, steps: usize) -> f64 {
 /// The `min` mode: per-pass cost on the 10³ block and the N = 10 and N = 20 blocks.
 fn min_table() {
     let full = speed_block(10);
-    let links = |damped, actuated| Pass::Links { damped, actuated };
-    let cases: Vec<(&str, Vec<Pass>)> = vec![
-        ("all_passes", full.passes().to_vec()),
-        ("integrate_only", vec![Pass::Integrate]),
-        ("links_plain", vec![links(false, false), Pass::Integrate]),
-        ("links_damped", vec![links(true, false), Pass::Integrate]),
-        (
-            "links_damped_actuated",
-            vec![links(true, true), Pass::Integrate],
-        ),
-        ("gravity", vec![Pass::Gravity, Pass::Integrate]),
-        ("floor_friction", vec![Pass::Floor, Pass::Integrate]),
-    ];
-    for (name, passes) in cases {
+    for (name, passes) in pass_cases(&full) {
         let mut sim = full.clone();
         sim.set_passes(passes);
         println!("{name:<24} {:9.1} µs", min_step_time(&mut sim, 50));

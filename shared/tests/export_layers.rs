@@ -6,18 +6,11 @@ use std::collections::HashSet;
 
 use amorph::export::{layer_contours, layer_svg};
 use amorph::material::{MaterialId, Palette};
-use amorph::voxel::{GridDims, VoxelGrid};
+use amorph::voxel::GridDims;
 use proptest::prelude::*;
 
-fn grid_from(dims: GridDims, cells: &[u8]) -> VoxelGrid {
-    VoxelGrid::from_cells(
-        dims,
-        cells
-            .iter()
-            .map(|&c| (c > 0).then(|| MaterialId(c - 1)))
-            .collect(),
-    )
-}
+mod common;
+use common::grid_from;
 
 fn signed_area(contour: &[[i64; 2]]) -> i64 {
     let n = contour.len();

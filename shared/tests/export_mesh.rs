@@ -10,6 +10,9 @@ use amorph::material::MaterialId;
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
 
+mod common;
+use common::grid_from;
+
 /// Checks the mesh is a closed oriented 2-manifold surface: every undirected edge is used by
 /// exactly two triangles, once in each direction, and no two vertices share a position (so the
 /// position-based STL is manifold too).
@@ -36,16 +39,6 @@ fn assert_closed_manifold(mesh: &TriangleMesh) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-fn grid_from(dims: GridDims, cells: &[u8]) -> VoxelGrid {
-    VoxelGrid::from_cells(
-        dims,
-        cells
-            .iter()
-            .map(|&c| (c > 0).then(|| MaterialId(c - 1)))
-            .collect(),
-    )
 }
 
 #[test]

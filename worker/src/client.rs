@@ -597,13 +597,9 @@ impl Worker {
                     warn!(worker = %lease_id, tasks = batch.len(), reason = %s.message(), "outcomes refused by the coordinator: dropped");
                 }
                 Err(s) => {
-                    let failed = self.call_failed("report", s);
                     // Keep them for the next session.
                     self.unreported.extend(batch);
-                    return Err(match failed {
-                        SessionError::Fatal(e) => SessionError::Fatal(e),
-                        retry => retry,
-                    });
+                    return Err(self.call_failed("report", s));
                 }
             }
         }

@@ -29,7 +29,6 @@ pub async fn termination() {
 use std::path::Path;
 
 use amorph::genome::Genome;
-use amorph::outcome::Outcome;
 use amorph::scene::Scene;
 use amorph::voxel::GridDims;
 use serde::Deserialize;
@@ -109,11 +108,6 @@ pub fn parse_resolution(text: &str) -> Result<GridDims> {
         [nx, ny, nz] => Ok(GridDims::new(nx, ny, nz)),
         _ => Err(WorkerError::Resolution(text.to_owned())),
     }
-}
-
-/// Evaluates one genome, exactly as a worker does for a task.
-pub fn evaluate(genome: &Genome, scene: &Scene, dims: GridDims) -> Outcome {
-    evaluate_caught(genome, scene, dims)
 }
 
 fn read(path: &Path) -> Result<String> {

@@ -191,7 +191,6 @@ impl TaskQueue {
             },
         );
         s.issued_workers.insert(id.clone());
-        s.stats.workers = s.workers.len();
         info!(worker = %id, name, capacity, "worker registered");
         id
     }
@@ -272,16 +271,19 @@ impl TaskQueue {
             w.leased.remove(&task_id);
         }
         let slot = t.slot;
-        let completion = match result {
-            Ok(outcome) => Completion {
-                slot,
-                outcome,
-                worker: match s.workers.get(worker) {
-                    Some(w) => format!("{} ({worker})", w.name),
-                    None => worker.to_owned(),
+        let (completion, disposition) = match result {
+            Ok(outcome) => (
+                Completion {
+                    slot,
+                    outcome,
+                    worker: match s.workers.get(worker) {
+                        Some(w) => format!("{} ({worker})", w.name),
+                        None => worker.to_owned(),
+                    },
+                    wall_seconds,
                 },
-                wall_seconds,
-            },
+                Disposition::Accepted,
+            ),
             Err(error) => {
                 s.stats.worker_errors += 1;
                 let t = s.tasks.get_mut(&task_id).expect("checked above");
@@ -300,16 +302,19 @@ impl TaskQueue {
                     attempts = t.errors.len(),
                     "task failed on every attempt: marked failed"
                 );
-                Completion {
-                    slot,
-                    outcome: Outcome::failed(Failure::Internal(format!(
-                        "no worker could evaluate it ({} attempts): {}",
-                        t.errors.len(),
-                        t.errors.join("; ")
-                    ))),
-                    worker: "coordinator".into(),
-                    wall_seconds: 0.0,
-                }
+                (
+                    Completion {
+                        slot,
+                        outcome: Outcome::failed(Failure::Internal(format!(
+                            "no worker could evaluate it ({} attempts): {}",
+                            t.errors.len(),
+                            t.errors.join("; ")
+                        ))),
+                        worker: "coordinator".into(),
+                        wall_seconds: 0.0,
+                    },
+                    Disposition::ErrorNoted,
+                )
             }
         };
         let t = s.tasks.get_mut(&task_id).expect("checked above");
@@ -322,12 +327,7 @@ impl TaskQueue {
             // The search may have given up on the batch (shutdown); nothing to deliver to then.
             let _ = tx.send(completion);
         }
-        Ok(
-            match s.tasks[&task_id].errors.len() as u32 >= self.rules.max_attempts {
-                true => Disposition::ErrorNoted,
-                false => Disposition::Accepted,
-            },
-        )
+        Ok(disposition)
     }
 
     /// A worker is alive and still evaluating `active`: extend those leases. Returns the tasks of
@@ -407,7 +407,6 @@ impl TaskQueue {
             }
         }
         if requeue.is_empty() {
-            s.stats.workers = s.workers.len();
             return;
         }
         // Back to the front in task order, so re-dispatch order does not depend on hashing.
@@ -423,7 +422,6 @@ impl TaskQueue {
             s.queue.push_front(id);
         }
         s.stats.expired_leases += requeue.len() as u64;
-        s.stats.workers = s.workers.len();
         info!(
             tasks = requeue.len(),
             "leases expired: tasks back in the queue"

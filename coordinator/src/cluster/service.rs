@@ -133,17 +133,9 @@ impl EvaluationCoordinator for CoordinatorService {
                     run_finished,
                 }));
             }
-            if tokio::time::timeout_at(deadline, notified).await.is_err() {
-                // One last look on the way out, so an empty answer is never stale.
-                let (tasks, run_finished) = self
-                    .queue
-                    .lease(&r.worker_id, r.max_tasks, Instant::now())
-                    .map_err(status)?;
-                return Ok(Response::new(v1::LeaseResponse {
-                    tasks: tasks.iter().map(|t| self.wire_task(t)).collect(),
-                    run_finished,
-                }));
-            }
+            // On timeout the next turn takes one last look and returns, so an empty answer is
+            // never stale.
+            let _ = tokio::time::timeout_at(deadline, notified).await;
         }
     }
 

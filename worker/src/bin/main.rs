@@ -129,7 +129,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     match command {
         Command::Evaluate { design } => {
             let (genome, scene, dims) = design.load()?;
-            let outcome = amorph_worker::evaluate(&genome, &scene, dims);
+            let outcome = amorph_worker::evaluate_caught(&genome, &scene, dims);
             println!(
                 "{}",
                 serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
