@@ -483,6 +483,7 @@ fn locomotion_summary(
     let json = serde_json::json!({
         "task": "locomotion",
         "displacement_m": m.map(|m| m.displacement),
+        "gait_displacement_m": m.map(|m| m.gait_displacement),
         "speed_percent_body_length_per_cycle": m.map(|m| m.speed_percent_per_cycle),
         "paper_speed_percent_body_length_per_cycle": 3.38,
         "body_length_m": m.map(|m| m.body_length),
@@ -492,7 +493,8 @@ fn locomotion_summary(
     });
     let fmt = |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.3}{unit}"));
     let md = format!(
-        "# Run `{name}`\n\n| task | displacement | speed (body lengths/cycle) | paper | voxels | evaluations | wall time | resolution | stop |\n|---|---|---|---|---|---|---|---|---|\n| locomotion | {} | {} | 3.38 % | {} | {} | {:.1} s | {} | {:?} |\n",
+        "# Run `{name}`\n\n| task | gait travel (fitness) | total travel | speed (body lengths/cycle) | paper | voxels | evaluations | wall time | resolution | stop |\n|---|---|---|---|---|---|---|---|---|---|\n| locomotion | {} | {} | {} | 3.38 % | {} | {} | {:.1} s | {} | {:?} |\n",
+        fmt(m.map(|m| 1e3 * m.gait_displacement), " mm"),
         fmt(m.map(|m| 1e3 * m.displacement), " mm"),
         fmt(m.map(|m| m.speed_percent_per_cycle), " %"),
         m.map_or("-".to_string(), |m| m.voxels.to_string()),
@@ -582,7 +584,12 @@ fn locomotion_table(robot: &LocomotionScene, best: &Individual, summary: &RunSum
                 "-",
             ),
             row(
-                "displacement",
+                "gait travel (fitness: median cycle × cycles)",
+                num(m.map(|m| 1e3 * m.gait_displacement), 3, " mm"),
+                "-",
+            ),
+            row(
+                "total travel of the centre of mass",
                 num(m.map(|m| 1e3 * m.displacement), 3, " mm"),
                 "-",
             ),

@@ -3,7 +3,8 @@
 //! `cargo bench -p amorph --bench dynamics` runs the criterion step benchmarks: the per-pass cost
 //! table on a 10³ block and the N = 10 and N = 20 blocks of the issue (voxel-steps/s as
 //! throughput). Extra modes, selected by a free argument after `--`:
-//! - `eval`: one paper-style locomotion evaluation of a random 20³-workspace robot, timed;
+//! - `eval`: paper-style locomotion evaluations of two random 20³-workspace robots (one the size
+//!   of the paper's, one the largest of 20), timed;
 //! - `min`: the per-pass table and the blocks as the *minimum* time per step over many short
 //!   repetitions, robust to a machine shared with other jobs (use it for before/after tables);
 //! - `study`: the error-against-run-time study: CSV and a PNG plot under
@@ -23,6 +24,11 @@ use rand_chacha::ChaCha8Rng;
 /// The issue's speed scene: an N³ block on the floor with gravity, friction 1.0/0.3, voxels with
 /// x < N/2 actuated ±20 % at a 0.5 s period, s = 0.01 m, E = 1 MPa, ν = 0.35, ρ = 1000.
 fn speed_block(n: usize) -> Simulation {
+    speed_block_with(n, false)
+}
+
+/// [`speed_block`], optionally with the lateral Poisson coupling on.
+fn speed_block_with(n: usize, poisson: bool) -> Simulation {
     let mut passive = Material::new("passive", 1.0e6, 0.35);
     passive.static_friction = 1.0;
     passive.kinetic_friction = 0.3;
@@ -44,6 +50,7 @@ fn speed_block(n: usize) -> Simulation {
             period: 0.5,
             phase: 0.0,
         }),
+        poisson,
         ..DynamicScene::paper_locomotion()
     };
     let mut sim = Simulation::new(&grid, &Palette(vec![passive, active]), &scene).unwrap();
@@ -141,6 +148,18 @@ fn min_table() {
         sim.set_passes(passes);
         println!("{name:<24} {:9.1} µs", min_step_time(&mut sim, 50));
     }
+    // The lateral Poisson coupling: its pass alone, and the whole step with it.
+    let coupled = speed_block_with(10, true);
+    let mut sim = coupled.clone();
+    sim.set_passes(vec![Pass::Poisson, Pass::Integrate]);
+    println!("{:<24} {:9.1} µs", "poisson", min_step_time(&mut sim, 50));
+    let mut sim = coupled.clone();
+    let t = min_step_time(&mut sim, 50);
+    println!(
+        "block_10 with poisson    {t:9.1} µs  {:.2e} voxel-steps/s, dt {:.3}x the uncoupled one",
+        1000.0 / (t * 1e-6),
+        coupled.dt() / full.dt()
+    );
     for n in [10, 20] {
         let mut sim = speed_block(n);
         let t = min_step_time(&mut sim, if n == 10 { 50 } else { 10 });
@@ -176,28 +195,35 @@ fn paper_robot(seed: u64) -> VoxelGrid {
     keep_largest_component(&grid)
 }
 
+/// The `eval` mode: paper-style evaluations of two random robots from 20 seeds, the one closest
+/// in size to the paper's 3,544-voxel robot (the reference engine's 178 s) and the largest.
 fn paper_evaluation() {
-    let grid = (0..20)
-        .map(paper_robot)
-        .max_by_key(|g| g.filled_count())
+    let robots: Vec<VoxelGrid> = (0..20).map(paper_robot).collect();
+    let paper_sized = robots
+        .iter()
+        .min_by_key(|g| g.filled_count().abs_diff(3544))
         .unwrap();
-    let scene = DynamicScene::paper_locomotion();
-    let start = Instant::now();
-    let outcome = simulate_locomotion(&grid, &foam_palette(), &scene);
-    let wall = start.elapsed().as_secs_f64();
-    println!(
-        "paper-style evaluation: {} voxels, {} steps ({:.3} s simulated, dt {:.3e} s), {:.1} s wall, \
-         {:.3e} voxel-steps/s, status {:?}, fitness {:.4e} m, speed {:.3} %/cycle",
-        outcome.voxel_count,
-        outcome.steps,
-        outcome.simulated_time,
-        outcome.dt,
-        wall,
-        outcome.voxel_count as f64 * outcome.steps as f64 / wall,
-        outcome.status,
-        outcome.fitness,
-        outcome.speed_percent_per_cycle
-    );
+    let largest = robots.iter().max_by_key(|g| g.filled_count()).unwrap();
+    for (name, grid) in [("paper-sized", paper_sized), ("largest", largest)] {
+        let scene = DynamicScene::paper_locomotion();
+        let start = Instant::now();
+        let outcome = simulate_locomotion(grid, &foam_palette(), &scene);
+        let wall = start.elapsed().as_secs_f64();
+        println!(
+            "paper-style evaluation, {name} robot: {} voxels, {} steps ({:.3} s simulated, settled \
+             after {:.3} s, dt {:.3e} s), {:.1} s wall, {:.3e} voxel-steps/s, status {:?}, \
+             gait {:.3} %/cycle",
+            outcome.voxel_count,
+            outcome.steps,
+            outcome.simulated_time,
+            outcome.settle_time,
+            outcome.dt,
+            wall,
+            outcome.voxel_count as f64 * outcome.steps as f64 / wall,
+            outcome.status,
+            outcome.speed_percent_per_cycle
+        );
+    }
 }
 
 fn main() {

@@ -82,8 +82,12 @@ impl LocomotionScene {
 /// What a locomotion evaluation measured, for reports.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LocomotionMetrics {
-    /// Centre-of-mass travel along +X over the actuation cycles, m (the fitness).
+    /// Centre-of-mass travel along +X over the actuation cycles, m.
     pub displacement: f64,
+    /// The fitness: the same travel as the scene's `dynamics.fitness` measures it, m (by default
+    /// the median per-cycle travel times the cycles, which a one-off topple does not move).
+    #[serde(default)]
+    pub gait_displacement: f64,
     /// Travel per cycle in % of body length (the paper's Table IV measure).
     pub speed_percent_per_cycle: f64,
     /// Extent of the settled body along X, m.
@@ -117,7 +121,8 @@ pub fn evaluate_locomotion(genome: &Genome, scene: &LocomotionScene, dims: GridD
     match result.status {
         LocomotionStatus::Completed => {
             let metrics = LocomotionMetrics {
-                displacement: result.fitness,
+                displacement: result.displacement,
+                gait_displacement: result.fitness,
                 speed_percent_per_cycle: result.speed_percent_per_cycle,
                 body_length: result.body_length,
                 voxels: result.voxel_count,

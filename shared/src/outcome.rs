@@ -100,9 +100,10 @@ impl Outcome {
                 metrics: Metrics::Locomotion(m),
                 ..
             } => Some(format!(
-                "{:.2} mm, {:.2} % body length/cycle",
-                1e3 * m.displacement,
-                m.speed_percent_per_cycle
+                "gait {:.2} mm ({:.2} % body length/cycle), travel {:.2} mm",
+                1e3 * m.gait_displacement,
+                m.speed_percent_per_cycle,
+                1e3 * m.displacement
             )),
             Self::Failed { .. } => None,
         }

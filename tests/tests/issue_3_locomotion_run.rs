@@ -62,10 +62,15 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
         .collect();
     assert!(!evaluated.is_empty(), "no design was evaluated");
     for (fitness, m) in &evaluated {
-        assert_eq!(*fitness, m.displacement);
+        assert_eq!(*fitness, m.gait_displacement);
         assert!(m.body_length > 0.0 && m.body_length <= 0.008 + 1e-12);
         assert_eq!(m.centre_of_mass_trace.len(), 3, "settled + 2 cycles");
-        let expected = 100.0 * m.displacement / m.body_length / 2.0;
+        // Two cycles: the median of the per-cycle travels is their mean, so the gait travel is
+        // the total travel up to rounding.
+        let total = m.centre_of_mass_trace[2][0] - m.centre_of_mass_trace[0][0];
+        assert!((m.displacement - total).abs() <= 1e-15);
+        assert!((m.gait_displacement - total).abs() <= 1e-12 * total.abs().max(1e-6));
+        let expected = 100.0 * m.gait_displacement / m.body_length / 2.0;
         assert!((m.speed_percent_per_cycle - expected).abs() <= 1e-12 * expected.abs().max(1.0));
     }
 

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::math::Vec3;
-use super::scene::DynamicScene;
+use super::scene::{DynamicScene, LocomotionFitness};
 use super::simulation::{DivergenceReason, Simulation};
 use crate::material::Palette;
 use crate::voxel::{VoxelGrid, keep_largest_component};
@@ -28,9 +28,12 @@ pub enum LocomotionStatus {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LocomotionOutcome {
     pub status: LocomotionStatus,
+    /// Travel of the centre of mass along +X as the scene's [`LocomotionFitness`] measures it, m
+    /// (0 unless completed).
+    pub fitness: f64,
     /// Displacement of the centre of mass along +X from the end of settling to the end of the
     /// last actuation cycle, m (0 unless completed).
-    pub fitness: f64,
+    pub displacement: f64,
     /// fitness / body length / cycles, in % of body length per cycle (paper's Table IV measure).
     pub speed_percent_per_cycle: f64,
     /// Extent of the body along X at rest, m.
@@ -52,6 +55,7 @@ impl LocomotionOutcome {
         Self {
             status,
             fitness: 0.0,
+            displacement: 0.0,
             speed_percent_per_cycle: 0.0,
             body_length: 0.0,
             voxel_count,
@@ -143,6 +147,7 @@ pub fn simulate_locomotion_observed(
             time: d.time,
         };
         outcome.fitness = 0.0;
+        outcome.displacement = 0.0;
         outcome.speed_percent_per_cycle = 0.0;
     }
     outcome
@@ -188,8 +193,45 @@ fn run(
         }
     }
     let end = sim.centre_of_mass();
-    outcome.fitness = end.x - start.x;
+    outcome.displacement = end.x - start.x;
+    outcome.fitness = match scene.fitness {
+        LocomotionFitness::TotalDisplacement => outcome.displacement,
+        LocomotionFitness::SteadyGait => {
+            let xs: Vec<f64> = outcome.centre_of_mass_trace.iter().map(|c| c[0]).collect();
+            let per_cycle: Vec<f64> = xs.windows(2).map(|w| w[1] - w[0]).collect();
+            let cycles = per_cycle.len() as f64;
+            median(per_cycle) * cycles
+        }
+    };
     let cycles = f64::from(scene.actuation_cycles.max(1));
     outcome.speed_percent_per_cycle = 100.0 * outcome.fitness / outcome.body_length / cycles;
     Ok(())
+}
+
+/// The median (mean of the middle two for an even count), 0 for none. Values are finite here:
+/// a non-finite state ends the simulation as a divergence first.
+fn median(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median;
+
+    #[test]
+    fn median_ignores_a_one_off_jump() {
+        assert_eq!(median(vec![]), 0.0);
+        assert_eq!(median(vec![3.0]), 3.0);
+        assert_eq!(median(vec![0.1, 9.0, 0.3]), 0.3);
+        assert_eq!(median(vec![0.2, 0.1, 6.0, 0.3]), 0.25);
+    }
 }

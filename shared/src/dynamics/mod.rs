@@ -15,6 +15,7 @@ mod link;
 mod locomotion;
 mod math;
 mod passes;
+mod poisson;
 mod scene;
 mod simulation;
 mod state;
@@ -26,6 +27,7 @@ pub use locomotion::{
 };
 pub use math::{Mat3, Quat, Vec3};
 pub use scene::{
-    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, SettleRule, foam_palette,
+    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, LocomotionFitness, SettleRule,
+    foam_palette,
 };
 pub use simulation::{Divergence, DivergenceReason, Energy, Pass, Simulation};

@@ -13,8 +13,9 @@ use super::passes::{
     FloorContact, external_force_pass, floor_pass, global_damping_pass, gravity_pass,
     integrate_pass,
 };
+use super::poisson::PoissonCoupling;
 use super::scene::DynamicScene;
-use super::state::{Links, Voxels, build_state};
+use super::state::{Links, Voxels, build_state, link_damping_time};
 use crate::material::Palette;
 use crate::voxel::VoxelGrid;
 
@@ -43,6 +44,7 @@ pub struct Divergence {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
     Links { damped: bool, actuated: bool },
+    Poisson,
     ExternalForces,
     Gravity,
     GlobalDamping,
@@ -78,6 +80,7 @@ pub struct Simulation {
     global_damping: (Vec<f64>, Vec<f64>),
     floor: FloorContact,
     collisions: Collisions,
+    poisson: PoissonCoupling,
     gravity: Vec3,
     dt: f64,
     time: f64,
@@ -91,8 +94,25 @@ impl Simulation {
     pub fn new(grid: &VoxelGrid, palette: &Palette, scene: &DynamicScene) -> Result<Self> {
         scene.validate()?;
         let s = scene.voxel_size;
-        let (mut voxels, links) = build_state(grid, palette, s, scene.damping.link)?;
+        let (mut voxels, mut links) = build_state(grid, palette, s, scene.damping.link)?;
         let n = voxels.len();
+        let mut poisson = PoissonCoupling::default();
+        if scene.poisson && voxels.poisson_ratio.iter().any(|&nu| nu != 0.0) {
+            let youngs: Vec<f64> = voxels.stiffness.iter().map(|k| k / s).collect();
+            poisson = PoissonCoupling::apply_to_links(
+                &voxels,
+                &mut links,
+                &youngs,
+                &voxels.poisson_ratio,
+                s,
+            );
+            // The axial stiffness changed: so did the lattice's top frequency.
+            for k in 0..links.len() {
+                let m_min = voxels.mass[links.a[k] as usize].min(voxels.mass[links.b[k] as usize]);
+                links.damping_time[k] =
+                    link_damping_time(links.axial[k], m_min, scene.damping.link);
+            }
+        }
         if scene.floor.is_some() {
             let lowest = voxels
                 .position
@@ -158,6 +178,7 @@ impl Simulation {
             global_damping,
             floor,
             collisions,
+            poisson,
             gravity,
             dt,
             time: 0.0,
@@ -178,6 +199,9 @@ impl Simulation {
                     && self.actuation_time.is_some()
                     && self.voxels.actuated.iter().any(|&a| a),
             });
+        }
+        if self.poisson.is_active() {
+            passes.push(Pass::Poisson);
         }
         if !self.external.is_empty() {
             passes.push(Pass::ExternalForces);
@@ -322,6 +346,13 @@ impl Simulation {
                         (false, true) => link_pass::<false, true>(l, v, link_step),
                         (true, true) => link_pass::<true, true>(l, v, link_step),
                     };
+                }
+                Pass::Poisson => {
+                    let (links, s) = (&self.links, link_step.voxel_size);
+                    let stretch = link_step.actuation_factor - 1.0;
+                    self.poisson.pass(links, &mut self.voxels, |k| {
+                        (links.actuated_fraction[k] * stretch + 1.0) * s
+                    });
                 }
                 Pass::ExternalForces => external_force_pass(&mut self.voxels, &self.external),
                 Pass::Gravity => gravity_pass(&mut self.voxels, self.gravity),
@@ -483,14 +514,18 @@ impl Simulation {
                 contact += 0.5 * self.floor.stiffness[i] * pen * pen;
             }
         }
-        let elastic = link_energy(
-            &self.links,
-            v,
-            LinkStep {
-                voxel_size: s,
-                actuation_factor: self.actuation_factor(),
-            },
-        );
+        let factor = self.actuation_factor();
+        let step = LinkStep {
+            voxel_size: s,
+            actuation_factor: factor,
+        };
+        let mut elastic = link_energy(&self.links, v, step);
+        if self.poisson.is_active() {
+            let links = &self.links;
+            elastic += self.poisson.energy(links, v, |k| {
+                (links.actuated_fraction[k] * (factor - 1.0) + 1.0) * s
+            });
+        }
         Energy {
             kinetic,
             elastic,

@@ -26,6 +26,8 @@ pub struct Voxels {
     pub inv_inertia: Vec<f64>,
     /// Axial stiffness E·s of the voxel's own material, N/m (contact and global damping scale).
     pub stiffness: Vec<f64>,
+    /// Poisson's ratio ν of the voxel's material.
+    pub poisson_ratio: Vec<f64>,
     pub static_friction: Vec<f64>,
     pub kinetic_friction: Vec<f64>,
     /// Grid cell of the voxel (x, y, z), for collision adjacency and reporting.
@@ -83,6 +85,12 @@ impl Links {
 /// Rounded up to 14 so that ζ never exceeds the requested ratio.
 pub const TOP_EIGENVALUE: f64 = 14.0;
 
+/// The link's stiffness-proportional damping time β = 2ζ/ω_top (s) for axial stiffness `axial`
+/// (N/m), the lighter voxel's mass `m_min` (kg) and the damping ratio ζ.
+pub fn link_damping_time(axial: f64, m_min: f64, zeta: f64) -> f64 {
+    2.0 * zeta / (TOP_EIGENVALUE * axial / m_min).sqrt()
+}
+
 /// Builds voxels and links from a grid: voxel centres at ((x, y, z) + ½)·s, one link per pair of
 /// face-adjacent filled cells. `link_damping` is the link damping ratio ζ.
 pub fn build_state(
@@ -122,6 +130,7 @@ pub fn build_state(
         v.inv_mass.push(1.0 / mass);
         v.inv_inertia.push(6.0 / (mass * s * s));
         v.stiffness.push(m.youngs_modulus * s);
+        v.poisson_ratio.push(m.poisson_ratio);
         v.static_friction.push(m.static_friction);
         v.kinetic_friction.push(m.kinetic_friction);
         v.cell.push([x as u16, y as u16, z as u16]);
@@ -174,8 +183,8 @@ pub fn build_state(
             l.bending.push(bending);
             l.torsion.push(g * polar / s);
             let m_min = v.mass[a as usize].min(v.mass[b as usize]);
-            let omega_top = (TOP_EIGENVALUE * axial / m_min).sqrt();
-            l.damping_time.push(2.0 * link_damping / omega_top);
+            l.damping_time
+                .push(link_damping_time(axial, m_min, link_damping));
             l.actuated_fraction
                 .push(0.5 * (f64::from(u8::from(pa.actuated)) + f64::from(u8::from(pb.actuated))));
         }
