@@ -6,27 +6,31 @@
 //! with six unknowns; Jacobi smoothing `P = (I − ω D⁻¹A) P_tent` lowers the energy of the coarse
 //! basis; coarse operators are Galerkin products `Pᵀ A P`. The V-cycle does forward block
 //! Gauss–Seidel before the coarse correction and backward after, which makes it a symmetric
-//! positive definite preconditioner, and solves the coarsest level with a sparse Cholesky.
+//! positive definite preconditioner, and solves the coarsest level with a sparse Cholesky. The
+//! hierarchy is built in double precision; the V-cycle runs on single-precision copies of its
+//! matrices and vectors (`single.rs`: it is memory-bound, and a preconditioner need not be exact).
 
-use super::bsr::{BlockMatrix, block_gemm_add, block_mul_add};
+use super::bsr::{BlockMatrix, block_gemm_add};
 use super::direct::DirectFactor;
 use super::element::Block;
 use super::error::Result;
 use super::params::MultigridParams;
 use super::pcg::{Precondition, inverse_diagonal_blocks};
+use super::single::{Block32, BlockMatrix32, block_mul_add32, block32};
 use super::spgemm::multiply;
 
+/// One level of the V-cycle, in single precision.
 #[derive(Debug)]
 struct Level {
-    a: BlockMatrix,
-    inverse_diagonal: Vec<Block>,
+    a: BlockMatrix32,
+    inverse_diagonal: Vec<Block32>,
     /// Prolongator to the next level (fine rows × coarse columns) and its transpose.
-    p: BlockMatrix,
-    r: BlockMatrix,
+    p: BlockMatrix32,
+    r: BlockMatrix32,
     /// Scratch: right-hand side, solution and residual of this level.
-    b: Vec<f64>,
-    x: Vec<f64>,
-    res: Vec<f64>,
+    b: Vec<f32>,
+    x: Vec<f32>,
+    res: Vec<f32>,
 }
 
 /// The multigrid hierarchy and its V-cycle.
@@ -34,7 +38,10 @@ struct Level {
 pub(crate) struct Multigrid {
     levels: Vec<Level>,
     coarse_factor: DirectFactor,
+    /// The coarsest level's right-hand side and solution, in double for the factor, and in
+    /// single for the level above.
     coarse_b: Vec<f64>,
+    coarse_x: Vec<f32>,
 }
 
 /// Rigid-body modes of a node at grid position `x` in scaled unknowns (u, s θ) divided by s:
@@ -126,22 +133,32 @@ fn orthonormalise(
     (q, r_blocks)
 }
 
-/// λ_max(D⁻¹A) by power iteration from a fixed start vector (deterministic).
-fn spectral_radius(a: &BlockMatrix, inverse_diagonal: &[Block], iterations: usize) -> f64 {
-    let n = a.dof();
-    let mut v: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
+/// λ_max(D⁻¹A) by power iteration from a fixed start vector (deterministic), on the single-
+/// precision copies: the prolongator smoothing needs it to ~10 %, and it is memory-bound.
+fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: usize) -> f64 {
+    let n = 6 * a.n;
+    let mut v: Vec<f32> = (0..n).map(|i| 1.0 + (i % 7) as f32 / 7.0).collect();
     let mut w = vec![0.0; n];
     let mut lambda = 1.0;
     for _ in 0..iterations {
-        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        v.iter_mut().for_each(|x| *x /= norm);
+        let norm = v
+            .iter()
+            .map(|&x| f64::from(x) * f64::from(x))
+            .sum::<f64>()
+            .sqrt();
+        v.iter_mut()
+            .for_each(|x| *x = (f64::from(*x) / norm) as f32);
         a.mul_vec(&v, &mut w);
         for (inv, wr) in inverse_diagonal.iter().zip(w.chunks_exact_mut(6)) {
             let mut acc = [0.0; 6];
-            block_mul_add(inv, wr, &mut acc);
+            block_mul_add32(inv, wr, &mut acc);
             wr.copy_from_slice(&acc);
         }
-        lambda = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+        lambda = w
+            .iter()
+            .map(|&x| f64::from(x) * f64::from(x))
+            .sum::<f64>()
+            .sqrt();
         std::mem::swap(&mut v, &mut w);
     }
     lambda
@@ -205,48 +222,56 @@ fn smoothed_prolongator(
 
 impl Multigrid {
     /// Builds the hierarchy for `a`, whose block rows sit at grid `coords`.
-    pub fn new(a: BlockMatrix, coords: &[[u32; 3]], params: &MultigridParams) -> Result<Self> {
+    pub fn new(fine: &BlockMatrix, coords: &[[u32; 3]], params: &MultigridParams) -> Result<Self> {
         let mut levels = Vec::new();
-        let mut a = a;
+        // The fine matrix is borrowed (CG keeps it); each coarse one is owned by this loop.
+        let mut coarser: Option<BlockMatrix> = None;
         let mut coords = coords.to_vec();
         let mut modes: Vec<Block> = coords
             .iter()
             .map(|c| rigid_modes([f64::from(c[0]), f64::from(c[1]), f64::from(c[2])]))
             .collect();
-        while a.n > params.coarse_max_nodes && levels.len() + 1 < params.max_levels {
+        loop {
+            let a = coarser.as_ref().unwrap_or(fine);
+            if a.n <= params.coarse_max_nodes || levels.len() + 1 >= params.max_levels {
+                break;
+            }
             let (aggregate_of, coarse_coords) = aggregate(&coords);
             let nc = coarse_coords.len();
             if 2 * nc > a.n {
                 break; // aggregation no longer coarsens (a thin sliver): solve directly here
             }
-            let inverse_diagonal = inverse_diagonal_blocks(&a)?;
-            let lambda = spectral_radius(&a, &inverse_diagonal, params.power_iterations);
+            let inverse_diagonal = inverse_diagonal_blocks(a)?;
+            let a32 = BlockMatrix32::from_f64(a);
+            let inverse_diagonal32: Vec<Block32> = inverse_diagonal.iter().map(block32).collect();
+            let lambda = spectral_radius(&a32, &inverse_diagonal32, params.power_iterations);
             let omega = params.prolongator_damping / lambda;
             let (q, coarse_modes) = orthonormalise(&modes, &aggregate_of, nc);
-            let p = smoothed_prolongator(&a, &inverse_diagonal, &q, &aggregate_of, omega);
+            let p = smoothed_prolongator(a, &inverse_diagonal, &q, &aggregate_of, omega);
             let r = p.transpose(nc);
-            let ap = multiply(&a, &p, nc);
+            let ap = multiply(a, &p, nc);
             let coarse = multiply(&r, &ap, nc);
             let dof = a.dof();
             levels.push(Level {
-                a,
-                inverse_diagonal,
-                p,
-                r,
+                a: a32,
+                inverse_diagonal: inverse_diagonal32,
+                p: BlockMatrix32::from_f64(&p),
+                r: BlockMatrix32::from_f64(&r),
                 b: vec![0.0; dof],
                 x: vec![0.0; dof],
                 res: vec![0.0; dof],
             });
-            a = coarse;
+            coarser = Some(coarse);
             coords = coarse_coords;
             modes = coarse_modes;
         }
-        let coarse_factor = DirectFactor::new(&a)?;
-        let coarse_b = vec![0.0; a.dof()];
+        let a = coarser.as_ref().unwrap_or(fine);
+        let coarse_factor = DirectFactor::new(a)?;
         Ok(Self {
             levels,
             coarse_factor,
-            coarse_b,
+            coarse_b: vec![0.0; a.dof()],
+            coarse_x: vec![0.0; a.dof()],
         })
     }
 
@@ -259,95 +284,44 @@ impl Multigrid {
     fn v_cycle(&mut self, l: usize, sweeps: usize) {
         if l == self.levels.len() {
             self.coarse_factor.solve_in_place(&mut self.coarse_b);
+            for (x, b) in self.coarse_x.iter_mut().zip(&self.coarse_b) {
+                *x = *b as f32;
+            }
             return;
         }
         let (head, tail) = self.levels.split_at_mut(l + 1);
         let level = &mut head[l];
         level.x.fill(0.0);
         for _ in 0..sweeps {
-            gauss_seidel(
-                &level.a,
-                &level.inverse_diagonal,
-                &level.b,
-                &mut level.x,
-                false,
-            );
+            let (a, d) = (&level.a, &level.inverse_diagonal);
+            a.gauss_seidel(d, &level.b, &mut level.x, false);
         }
         level.a.mul_vec(&level.x, &mut level.res);
         for (r, b) in level.res.iter_mut().zip(&level.b) {
             *r = b - *r;
         }
-        let coarse_rhs = match tail.first_mut() {
-            Some(next) => &mut next.b,
-            None => &mut self.coarse_b,
-        };
-        restrict(&level.r, &level.res, coarse_rhs);
+        match tail.first_mut() {
+            Some(next) => level.r.mul_vec(&level.res, &mut next.b),
+            None => {
+                // The coarsest right-hand side, through `coarse_x`, in double for the factor.
+                level.r.mul_vec(&level.res, &mut self.coarse_x);
+                for (b, c) in self.coarse_b.iter_mut().zip(&self.coarse_x) {
+                    *b = f64::from(*c);
+                }
+            }
+        }
         self.v_cycle(l + 1, sweeps);
         let (head, tail) = self.levels.split_at_mut(l + 1);
         let level = &mut head[l];
         let coarse_x = match tail.first() {
             Some(next) => &next.x,
-            None => &self.coarse_b,
+            None => &self.coarse_x,
         };
-        prolong_add(&level.p, coarse_x, &mut level.x);
+        level.p.mul_vec_add(coarse_x, &mut level.x);
         for _ in 0..sweeps {
-            gauss_seidel(
-                &level.a,
-                &level.inverse_diagonal,
-                &level.b,
-                &mut level.x,
-                true,
-            );
+            let (a, d) = (&level.a, &level.inverse_diagonal);
+            a.gauss_seidel(d, &level.b, &mut level.x, true);
         }
-    }
-}
-
-/// y = R x.
-fn restrict(r: &BlockMatrix, x: &[f64], y: &mut [f64]) {
-    r.mul_vec(x, y);
-}
-
-/// y += P x.
-fn prolong_add(p: &BlockMatrix, x: &[f64], y: &mut [f64]) {
-    for (row, y_row) in y.chunks_exact_mut(6).enumerate() {
-        let (cols, blocks) = p.row(row);
-        let mut acc = [0.0; 6];
-        for (&c, b) in cols.iter().zip(blocks) {
-            let c = c as usize;
-            block_mul_add(b, &x[6 * c..6 * c + 6], &mut acc);
-        }
-        for (y, a) in y_row.iter_mut().zip(acc) {
-            *y += a;
-        }
-    }
-}
-
-/// One block Gauss–Seidel pass over the rows, forward or backward.
-fn gauss_seidel(
-    a: &BlockMatrix,
-    inverse_diagonal: &[Block],
-    b: &[f64],
-    x: &mut [f64],
-    backward: bool,
-) {
-    let mut relax = |i: usize| {
-        let (cols, blocks) = a.row(i);
-        let mut acc = [0.0; 6];
-        for (&c, block) in cols.iter().zip(blocks) {
-            let c = c as usize;
-            if c != i {
-                block_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
-            }
-        }
-        let r: [f64; 6] = std::array::from_fn(|k| b[6 * i + k] - acc[k]);
-        let mut xi = [0.0; 6];
-        block_mul_add(&inverse_diagonal[i], &r, &mut xi);
-        x[6 * i..6 * i + 6].copy_from_slice(&xi);
-    };
-    if backward {
-        (0..a.n).rev().for_each(&mut relax);
-    } else {
-        (0..a.n).for_each(&mut relax);
     }
 }
 
@@ -367,8 +341,12 @@ impl Precondition for MultigridPreconditioner {
             z.copy_from_slice(&mg.coarse_b);
             return;
         }
-        mg.levels[0].b.copy_from_slice(r);
+        for (b, r) in mg.levels[0].b.iter_mut().zip(r) {
+            *b = *r as f32;
+        }
         mg.v_cycle(0, self.sweeps);
-        z.copy_from_slice(&mg.levels[0].x);
+        for (z, x) in z.iter_mut().zip(&mg.levels[0].x) {
+            *z = f64::from(*x);
+        }
     }
 }

@@ -14,6 +14,7 @@ mod error;
 mod model;
 mod params;
 mod pcg;
+mod single;
 mod solve;
 mod spgemm;
 mod system;

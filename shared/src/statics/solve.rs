@@ -191,8 +191,7 @@ impl StaticSolver {
                         .iter()
                         .map(|&n| model.node_coords(n as usize).map(|c| c as u32))
                         .collect();
-                    let multigrid =
-                        Multigrid::new(system.matrix.clone(), &coords, &params.multigrid)?;
+                    let multigrid = Multigrid::new(&system.matrix, &coords, &params.multigrid)?;
                     levels = multigrid.level_count();
                     (
                         Box::new(MultigridPreconditioner {
