@@ -164,6 +164,12 @@ impl RunStore {
                 message: format!("format {format:?}, this coordinator reads {FORMAT:?}"),
             });
         }
+        // Read the stored config with today's schema first, so that a key added since (with the
+        // default that reproduces the old behaviour, e.g. `scene.dynamics.poisson`) does not
+        // count as a change; one that no longer parses is compared as stored, and so differs.
+        let stored_config = RunConfig::parse(&stored_config, &path)
+            .map(|c| config_text(&c))
+            .unwrap_or(stored_config);
         let stored: toml::Table =
             toml::from_str(&stored_config).map_err(|e| StoreError::Corrupt {
                 path: path.clone(),
@@ -495,4 +501,53 @@ fn first_difference_except(a: &toml::Table, b: &toml::Table, ignored: &[&str]) -
             (x, y) if x != y => Some(key.clone()),
             _ => None,
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn locomotion_config(dir: &Path, seed: u64) -> RunConfig {
+        let text = format!(
+            "name = \"resume-schema\"\nseed = {seed}\nresults_dir = {:?}\n\n[budget]\nevaluations = 100\n\n\
+             [resolution]\nlevels = [[4, 4, 4]]\n\n[scene]\nkind = \"locomotion\"\n",
+            dir.display().to_string()
+        );
+        RunConfig::parse(&text, Path::new("resume-schema.toml")).expect("valid config")
+    }
+
+    /// A store written before a key existed (here `scene.dynamics.poisson`, whose default is the
+    /// old behaviour) resumes; a real change still does not.
+    #[test]
+    fn resume_reads_the_stored_config_with_todays_defaults() {
+        let dir = std::env::temp_dir().join(format!("amorph-store-{}", std::process::id()));
+        let config = locomotion_config(&dir, 1);
+        let store = RunStore::create(&config, true).unwrap();
+        let old_text: String = config_text(&config)
+            .lines()
+            .filter(|line| !line.starts_with("poisson ="))
+            .map(|line| format!("{line}\n"))
+            .collect();
+        assert_ne!(
+            old_text,
+            config_text(&config),
+            "the key must be in today's config"
+        );
+        store
+            .with(|c| {
+                c.execute(
+                    "UPDATE run SET value = ?1 WHERE key = 'config'",
+                    [&old_text],
+                )?;
+                Ok(())
+            })
+            .unwrap();
+        drop(store);
+        RunStore::resume(&config).expect("an added key with its old default resumes");
+        match RunStore::resume(&locomotion_config(&dir, 2)) {
+            Err(StoreError::ConfigChanged { differs, .. }) => assert_eq!(differs, "seed"),
+            other => panic!("a changed seed must not resume: {:?}", other.map(|_| ())),
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
