@@ -541,7 +541,7 @@ fn beam_table(beam: &BeamScene, best: &Individual, summary: &RunSummary) -> Bloc
 }
 
 /// Table IV's quantities for this run's best robot beside the paper's simulated robot (18 mm,
-/// 1.675 mg, 0.07 s period, 3.38 % of body length per cycle).
+/// 1.675 g, printed as 1.675×10⁻³ (kg), 0.07 s period, 3.38 % of body length per cycle).
 fn locomotion_table(robot: &LocomotionScene, best: &Individual, summary: &RunSummary) -> Block {
     let m = best.outcome.locomotion_metrics();
     let dims = summary.dims;
@@ -576,7 +576,7 @@ fn locomotion_table(robot: &LocomotionScene, best: &Individual, summary: &RunSum
                 m.map_or("-".into(), |m| format!("{} at {dims}", m.voxels)),
                 "20x20x20 workspace",
             ),
-            row("mass", num(mass_mg, 3, " mg"), "1.675 mg"),
+            row("mass", num(mass_mg, 3, " mg"), "1,675 mg (Table IV: 1.675×10⁻³, read as kg)"),
             row("actuation period", num(period, 3, " s"), "0.07 s"),
             row(
                 "actuation cycles",
