@@ -576,7 +576,11 @@ fn locomotion_table(robot: &LocomotionScene, best: &Individual, summary: &RunSum
                 m.map_or("-".into(), |m| format!("{} at {dims}", m.voxels)),
                 "20x20x20 workspace",
             ),
-            row("mass", num(mass_mg, 3, " mg"), "1,675 mg (Table IV: 1.675×10⁻³, read as kg)"),
+            row(
+                "mass",
+                num(mass_mg, 3, " mg"),
+                "1,675 mg (Table IV: 1.675×10⁻³, read as kg)",
+            ),
             row("actuation period", num(period, 3, " s"), "0.07 s"),
             row(
                 "actuation cycles",
