@@ -481,7 +481,7 @@ pub fn link_energy(links: &Links, voxels: &Voxels, step: LinkStep) -> f64 {
             .apply_transpose(voxels.position[ib] - voxels.position[ia])
             .to_axis(axis);
         let phi = q_rel.rotation_vector().to_axis(axis);
-        let rest = s * (1.0 + links.actuated_fraction[k] * stretch);
+        let rest = links.rest_length(k, s, stretch);
         let delta = d.x - rest;
         energy += 0.5
             * (links.axial[k] * delta * delta

@@ -26,6 +26,7 @@
 //! stiffer P-wave modulus of a confined solid: at ν = 0.35 an interior link is 1.60× stiffer
 //! axially, so the automatic time step (from the stiffest link) is 1/√1.60 = 0.79× as long.
 
+use super::link::LinkStep;
 use super::state::{Links, Voxels};
 use crate::material::link_youngs_modulus;
 
@@ -58,16 +59,11 @@ fn condensed(e: f64, nu: f64, axes: usize) -> (f64, f64) {
 
 impl PoissonCoupling {
     /// Builds the coupling and stiffens every link's axial term to the condensed modulus M of its
-    /// voxels (the harmonic mean of the two ends, like E for a mixed link). `youngs` and `nu` are
-    /// per voxel; `voxel_size` is s.
-    pub fn apply_to_links(
-        voxels: &Voxels,
-        links: &mut Links,
-        youngs: &[f64],
-        nu: &[f64],
-        voxel_size: f64,
-    ) -> Self {
+    /// voxels (the harmonic mean of the two ends, like E for a mixed link); `voxel_size` is s.
+    pub fn apply_to_links(voxels: &Voxels, links: &mut Links, voxel_size: f64) -> Self {
         let n = voxels.len();
+        let youngs: Vec<f64> = voxels.stiffness.iter().map(|k| k / voxel_size).collect();
+        let nu = &voxels.poisson_ratio;
         let mut count = vec![[0u8; 3]; n];
         for k in 0..links.len() {
             let axis = usize::from(links.axis[k]);
@@ -111,30 +107,33 @@ impl PoissonCoupling {
     /// i, into `strain`: with one material it is √λ ēᵢ, and weighting each link by its own
     /// modulus keeps W_c below the links' own energy where a stiff voxel meets a soft one (with
     /// a voxel's λ on a soft link's strain the sum is not positive definite: a 1e4 stiffness
-    /// jump diverged within 400 steps). `rest(k)` is link k's rest length.
+    /// jump diverged within 400 steps). Strains are against the links' rest lengths at `step`.
     fn weighted_strains(
         &self,
         strain: &mut [[f64; 3]],
         links: &Links,
         voxels: &Voxels,
-        rest: impl Fn(usize) -> f64,
+        step: LinkStep,
     ) {
+        let stretch = step.actuation_factor - 1.0;
         strain.fill([0.0; 3]);
         for k in 0..links.len() {
             let (a, b) = (links.a[k] as usize, links.b[k] as usize);
             let axis = usize::from(links.axis[k]);
-            let e = ((voxels.position[b] - voxels.position[a]).norm() / rest(k) - 1.0)
+            let rest = links.rest_length(k, step.voxel_size, stretch);
+            let e = ((voxels.position[b] - voxels.position[a]).norm() / rest - 1.0)
                 * self.root_modulus[k];
             strain[a][axis] += e * self.scale[a][axis];
             strain[b][axis] += e * self.scale[b][axis];
         }
     }
 
-    /// Adds the coupling forces to the voxels. `rest(k)` is link k's current rest length (the
-    /// actuated one while actuating).
-    pub fn pass(&mut self, links: &Links, voxels: &mut Voxels, rest: impl Fn(usize) -> f64) {
+    /// Adds the coupling forces to the voxels, with the links' rest lengths at `step` (the
+    /// actuated ones while actuating).
+    pub fn pass(&mut self, links: &Links, voxels: &mut Voxels, step: LinkStep) {
+        let stretch = step.actuation_factor - 1.0;
         let mut scratch = std::mem::take(&mut self.scratch);
-        self.weighted_strains(&mut scratch, links, voxels, &rest);
+        self.weighted_strains(&mut scratch, links, voxels, step);
         for (e, scale) in scratch.iter_mut().zip(&self.scale) {
             // ∂W_c/∂ẽᵢ = V Σ_{j≠i} ẽⱼ, times the link-independent part of ∂ẽᵢ/∂ε_l.
             let [ex, ey, ez] = *e;
@@ -150,8 +149,9 @@ impl PoissonCoupling {
             let axis = usize::from(links.axis[k]);
             let generalised = (scratch[a][axis] + scratch[b][axis]) * self.root_modulus[k];
             let r = voxels.position[b] - voxels.position[a];
+            let rest = links.rest_length(k, step.voxel_size, stretch);
             // ∂ε/∂x_b = r/(|r| L₀): the force on b is −(∂W_c/∂ε) times that.
-            let f = r * (generalised / (r.norm() * rest(k)));
+            let f = r * (generalised / (r.norm() * rest));
             voxels.force[a] += f;
             voxels.force[b] -= f;
         }
@@ -159,9 +159,9 @@ impl PoissonCoupling {
     }
 
     /// The coupling energy W_c = V Σ_v Σᵢ<ⱼ ẽᵢ ẽⱼ (J) of the current state.
-    pub fn energy(&self, links: &Links, voxels: &Voxels, rest: impl Fn(usize) -> f64) -> f64 {
+    pub fn energy(&self, links: &Links, voxels: &Voxels, step: LinkStep) -> f64 {
         let mut strain = vec![[0.0; 3]; self.scale.len()];
-        self.weighted_strains(&mut strain, links, voxels, rest);
+        self.weighted_strains(&mut strain, links, voxels, step);
         self.volume
             * strain
                 .iter()

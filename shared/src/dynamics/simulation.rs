@@ -98,14 +98,7 @@ impl Simulation {
         let n = voxels.len();
         let mut poisson = PoissonCoupling::default();
         if scene.poisson && voxels.poisson_ratio.iter().any(|&nu| nu != 0.0) {
-            let youngs: Vec<f64> = voxels.stiffness.iter().map(|k| k / s).collect();
-            poisson = PoissonCoupling::apply_to_links(
-                &voxels,
-                &mut links,
-                &youngs,
-                &voxels.poisson_ratio,
-                s,
-            );
+            poisson = PoissonCoupling::apply_to_links(&voxels, &mut links, s);
             // The axial stiffness changed: so did the lattice's top frequency.
             for k in 0..links.len() {
                 let m_min = voxels.mass[links.a[k] as usize].min(voxels.mass[links.b[k] as usize]);
@@ -347,13 +340,7 @@ impl Simulation {
                         (true, true) => link_pass::<true, true>(l, v, link_step),
                     };
                 }
-                Pass::Poisson => {
-                    let (links, s) = (&self.links, link_step.voxel_size);
-                    let stretch = link_step.actuation_factor - 1.0;
-                    self.poisson.pass(links, &mut self.voxels, |k| {
-                        (links.actuated_fraction[k] * stretch + 1.0) * s
-                    });
-                }
+                Pass::Poisson => self.poisson.pass(&self.links, &mut self.voxels, link_step),
                 Pass::ExternalForces => external_force_pass(&mut self.voxels, &self.external),
                 Pass::Gravity => gravity_pass(&mut self.voxels, self.gravity),
                 Pass::GlobalDamping => global_damping_pass(
@@ -514,17 +501,13 @@ impl Simulation {
                 contact += 0.5 * self.floor.stiffness[i] * pen * pen;
             }
         }
-        let factor = self.actuation_factor();
         let step = LinkStep {
             voxel_size: s,
-            actuation_factor: factor,
+            actuation_factor: self.actuation_factor(),
         };
         let mut elastic = link_energy(&self.links, v, step);
         if self.poisson.is_active() {
-            let links = &self.links;
-            elastic += self.poisson.energy(links, v, |k| {
-                (links.actuated_fraction[k] * (factor - 1.0) + 1.0) * s
-            });
+            elastic += self.poisson.energy(&self.links, v, step);
         }
         Energy {
             kinetic,

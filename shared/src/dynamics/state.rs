@@ -75,6 +75,13 @@ impl Links {
     pub fn is_empty(&self) -> bool {
         self.a.is_empty()
     }
+
+    /// Rest length of link `k` (m) for voxel size `voxel_size` while actuated material's linear
+    /// rest-length factor is 1 + `stretch`.
+    #[inline(always)]
+    pub fn rest_length(&self, k: usize, voxel_size: f64, stretch: f64) -> f64 {
+        (self.actuated_fraction[k] * stretch + 1.0) * voxel_size
+    }
 }
 
 /// Highest eigenvalue of M⁻¹K of a dense voxel lattice in units of (EA/L)/m: the top of the

@@ -10,13 +10,13 @@
 //! hierarchy is built in double precision; the V-cycle runs on single-precision copies of its
 //! matrices and vectors (`single.rs`: it is memory-bound, and a preconditioner need not be exact).
 
-use super::bsr::{BlockMatrix, block_gemm_add};
+use super::bsr::{BlockMatrix, block_gemm_add, block_mul_add};
 use super::direct::DirectFactor;
 use super::element::Block;
 use super::error::Result;
 use super::params::MultigridParams;
 use super::pcg::{Precondition, inverse_diagonal_blocks};
-use super::single::{Block32, BlockMatrix32, block_mul_add32, block32};
+use super::single::{Block32, BlockMatrix32, block32};
 use super::spgemm::multiply;
 
 /// One level of the V-cycle, in single precision.
@@ -151,7 +151,7 @@ fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: 
         a.mul_vec(&v, &mut w);
         for (inv, wr) in inverse_diagonal.iter().zip(w.chunks_exact_mut(6)) {
             let mut acc = [0.0; 6];
-            block_mul_add32(inv, wr, &mut acc);
+            block_mul_add(inv, wr, &mut acc);
             wr.copy_from_slice(&acc);
         }
         lambda = w
@@ -296,10 +296,7 @@ impl Multigrid {
             let (a, d) = (&level.a, &level.inverse_diagonal);
             a.gauss_seidel(d, &level.b, &mut level.x, false);
         }
-        level.a.mul_vec(&level.x, &mut level.res);
-        for (r, b) in level.res.iter_mut().zip(&level.b) {
-            *r = b - *r;
-        }
+        level.a.residual(&level.b, &level.x, &mut level.res);
         match tail.first_mut() {
             Some(next) => level.r.mul_vec(&level.res, &mut next.b),
             None => {

@@ -13,18 +13,22 @@ pub(crate) struct BlockMatrix {
     pub blocks: Vec<Block>,
 }
 
-/// y += B x for one block.
+/// y += B x for one block, in double or (for the V-cycle, `single.rs`) single precision.
 #[inline(always)]
-pub(crate) fn block_mul_add(b: &Block, x: &[f64], y: &mut [f64; 6]) {
-    let x: &[f64; 6] = x.try_into().expect("six unknowns per node");
+pub(crate) fn block_mul_add<T>(b: &[T; 36], x: &[T], y: &mut [T; 6])
+where
+    T: Copy + std::ops::Add<Output = T> + std::ops::Mul<Output = T>,
+{
+    let x: &[T; 6] = x.try_into().expect("six unknowns per node");
     for (r, yr) in y.iter_mut().enumerate() {
-        let row: &[f64; 6] = b[6 * r..6 * r + 6].try_into().expect("block row");
-        *yr += row[0] * x[0]
-            + row[1] * x[1]
-            + row[2] * x[2]
-            + row[3] * x[3]
-            + row[4] * x[4]
-            + row[5] * x[5];
+        let row: &[T; 6] = b[6 * r..6 * r + 6].try_into().expect("block row");
+        *yr = *yr
+            + (row[0] * x[0]
+                + row[1] * x[1]
+                + row[2] * x[2]
+                + row[3] * x[3]
+                + row[4] * x[4]
+                + row[5] * x[5]);
     }
 }
 

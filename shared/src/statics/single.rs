@@ -6,7 +6,7 @@
 //! the fine matrix three times and the coarse ones as often, ~115 MB per iteration at 12×12×40 —
 //! so storing its matrices and vectors in `f32` halves what it reads.
 
-use super::bsr::BlockMatrix;
+use super::bsr::{BlockMatrix, block_mul_add};
 use super::element::Block;
 
 /// A 6×6 block in single precision.
@@ -43,30 +43,43 @@ impl BlockMatrix32 {
         (&self.cols[range.clone()], &self.blocks[range])
     }
 
+    /// Row `r` of A x.
+    #[inline(always)]
+    fn row_product(&self, r: usize, x: &[f32]) -> [f32; 6] {
+        let (cols, blocks) = self.row(r);
+        let mut acc = [0.0; 6];
+        for (&c, b) in cols.iter().zip(blocks) {
+            let c = 6 * c as usize;
+            block_mul_add(b, &x[c..c + 6], &mut acc);
+        }
+        acc
+    }
+
     /// y = A x.
     pub fn mul_vec(&self, x: &[f32], y: &mut [f32]) {
         for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
-            let (cols, blocks) = self.row(r);
-            let mut acc = [0.0; 6];
-            for (&c, b) in cols.iter().zip(blocks) {
-                let c = 6 * c as usize;
-                block_mul_add32(b, &x[c..c + 6], &mut acc);
-            }
-            y_row.copy_from_slice(&acc);
+            y_row.copy_from_slice(&self.row_product(r, x));
         }
     }
 
     /// y += A x.
     pub fn mul_vec_add(&self, x: &[f32], y: &mut [f32]) {
         for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
-            let (cols, blocks) = self.row(r);
-            let mut acc = [0.0; 6];
-            for (&c, b) in cols.iter().zip(blocks) {
-                let c = 6 * c as usize;
-                block_mul_add32(b, &x[c..c + 6], &mut acc);
-            }
-            for (y, a) in y_row.iter_mut().zip(acc) {
+            for (y, a) in y_row.iter_mut().zip(self.row_product(r, x)) {
                 *y += a;
+            }
+        }
+    }
+
+    /// res = b − A x.
+    pub fn residual(&self, b: &[f32], x: &[f32], res: &mut [f32]) {
+        for (r, res_row) in res.chunks_exact_mut(6).enumerate() {
+            for ((res, a), b) in res_row
+                .iter_mut()
+                .zip(self.row_product(r, x))
+                .zip(&b[6 * r..])
+            {
+                *res = b - a;
             }
         }
     }
@@ -86,12 +99,12 @@ impl BlockMatrix32 {
             for (&c, block) in cols.iter().zip(blocks) {
                 let c = c as usize;
                 if c != i {
-                    block_mul_add32(block, &x[6 * c..6 * c + 6], &mut acc);
+                    block_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
                 }
             }
             let r: [f32; 6] = std::array::from_fn(|k| b[6 * i + k] - acc[k]);
             let mut xi = [0.0; 6];
-            block_mul_add32(&inverse_diagonal[i], &r, &mut xi);
+            block_mul_add(&inverse_diagonal[i], &r, &mut xi);
             x[6 * i..6 * i + 6].copy_from_slice(&xi);
         };
         if backward {
@@ -99,20 +112,5 @@ impl BlockMatrix32 {
         } else {
             (0..self.n).for_each(&mut relax);
         }
-    }
-}
-
-/// y += B x for one single-precision block.
-#[inline(always)]
-pub(crate) fn block_mul_add32(b: &Block32, x: &[f32], y: &mut [f32; 6]) {
-    let x: &[f32; 6] = x.try_into().expect("six unknowns per node");
-    for (r, yr) in y.iter_mut().enumerate() {
-        let row: &[f32; 6] = b[6 * r..6 * r + 6].try_into().expect("block row");
-        *yr += row[0] * x[0]
-            + row[1] * x[1]
-            + row[2] * x[2]
-            + row[3] * x[3]
-            + row[4] * x[4]
-            + row[5] * x[5];
     }
 }
