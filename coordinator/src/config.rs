@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use amorph::genome::MutationParams;
-use amorph::scene::Scene;
+use amorph::task::Scene;
 use serde::{Deserialize, Serialize};
 
 use crate::search::{MigrationParams, ResolutionSchedule};
@@ -252,11 +252,18 @@ impl RunConfig {
         Self::try_from_raw(raw, path)
     }
 
-    pub fn try_from_raw(raw: RawConfig, path: &Path) -> Result<Self> {
-        validate(&raw).map_err(|message| ConfigError::Invalid {
+    /// Validates a parsed config; files the scene names (a custom profile's CSV) are read
+    /// relative to `path`'s folder and kept in the scene.
+    pub fn try_from_raw(mut raw: RawConfig, path: &Path) -> Result<Self> {
+        let invalid = |message: String| ConfigError::Invalid {
             path: path.to_owned(),
             message,
-        })?;
+        };
+        let base = path.parent().unwrap_or(Path::new("."));
+        raw.scene
+            .load_files(base)
+            .map_err(|e| invalid(format!("scene.{e}")))?;
+        validate(&raw).map_err(invalid)?;
         Ok(Self {
             raw,
             source: path.to_owned(),
@@ -323,24 +330,20 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     {
         return Err("budget.target_rms_percent must be a non-negative number".into());
     }
-    if b.target_rms_percent.is_some() && !matches!(raw.scene, amorph::scene::Scene::Beam(_)) {
-        return Err("budget.target_rms_percent applies to beam scenes only".into());
+    if b.target_rms_percent.is_some() && !raw.scene.has_target() {
+        return Err(format!(
+            "budget.target_rms_percent: a {} scene has no such target",
+            raw.scene.kind()
+        ));
     }
     raw.cluster.validate()?;
     raw.resolution.validate()?;
-    if matches!(raw.scene, amorph::scene::Scene::Beam(_)) {
-        // The beam runs along y (clamped at y = 0, loaded at the last y layer, deflecting in −z):
-        // [12, 12, 40] would be a 12-voxel-long beam 40 voxels deep, almost surely a slip for the
-        // paper's [12, 40, 12].
-        for (i, &[nx, ny, nz]) in raw.resolution.levels.iter().enumerate() {
-            if ny < nx || ny < nz {
-                return Err(format!(
-                    "resolution.levels[{i}] = [{nx}, {ny}, {nz}]: a beam runs along y, so ny must be its longest count (did you mean [{nx}, {nz}, {ny}]?)"
-                ));
-            }
-        }
+    raw.scene.validate().map_err(|e| format!("scene.{e}"))?;
+    for (i, &[nx, ny, nz]) in raw.resolution.levels.iter().enumerate() {
+        raw.scene
+            .check_dims(amorph::voxel::GridDims::new(nx, ny, nz))
+            .map_err(|e| format!("resolution.levels[{i}] = [{nx}, {ny}, {nz}]: {e}"))?;
     }
-    raw.scene.validate().map_err(|e| format!("scene: {e}"))?;
     Ok(())
 }
 

@@ -6,8 +6,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use amorph::genome::Genome;
-use amorph::outcome::Outcome;
-use amorph::scene::Scene;
+use amorph::task::{Outcome, Scene};
 use amorph::voxel::GridDims;
 
 use crate::ids::TaskId;
@@ -102,11 +101,7 @@ impl Evaluator for LocalEvaluator {
                             let started = std::time::Instant::now();
                             let completion = Completion {
                                 slot: i,
-                                outcome: amorph_worker::evaluate_caught(
-                                    &task.genome,
-                                    scene,
-                                    task.dims,
-                                ),
+                                outcome: scene.evaluate(&task.genome, task.dims),
                                 worker: "local".into(),
                                 wall_seconds: started.elapsed().as_secs_f64(),
                             };

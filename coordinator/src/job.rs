@@ -14,8 +14,9 @@ use tracing::{info, warn};
 use crate::cluster::{self, ClusterEvaluator, ServerOptions, TaskQueue};
 use crate::config::RunConfig;
 use crate::progress::Progress;
-use crate::run::{RunContext, RunError, RunSummary, StopReason, run};
+use crate::run::{RunContext, RunError, run};
 use crate::store::{RunStore, StoreError};
+use crate::summary::{RunSummary, StopReason};
 
 /// How to start a run store.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

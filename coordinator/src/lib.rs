@@ -12,8 +12,10 @@ pub mod results;
 pub mod run;
 pub mod search;
 pub mod store;
+pub mod summary;
 
 pub use config::RunConfig;
 pub use evaluator::{Evaluator, LocalEvaluator, Task};
 pub use job::{JobOptions, StoreMode, run_job};
-pub use run::{RunContext, RunSummary, StopReason, run};
+pub use run::{RunContext, run};
+pub use summary::{RunSummary, StopReason};

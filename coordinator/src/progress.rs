@@ -4,7 +4,7 @@
 use amorph::voxel::GridDims;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::run::RunSummary;
+use crate::summary::RunSummary;
 
 #[derive(Debug, Clone)]
 pub struct Progress {

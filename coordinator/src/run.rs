@@ -7,11 +7,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use amorph::genome::Genome;
-use amorph::outcome::Outcome;
+use amorph::task::{Outcome, Scene};
 use amorph::voxel::GridDims;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
 use tracing::info;
 
 use crate::config::RunConfig;
@@ -23,6 +22,7 @@ use crate::search::{Breeding, Individual, Island, ResolutionState, migrate};
 use crate::store::{
     EpochRecord, EvaluationRecord, MigrationRecord, Purpose, RunStore, StoreError, StoredEvaluation,
 };
+use crate::summary::{HistoryRow, RunSummary, StopReason, fittest};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -47,56 +47,6 @@ pub struct RunContext<'a> {
 }
 
 pub type Result<T> = std::result::Result<T, RunError>;
-
-/// Why a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum StopReason {
-    EvaluationBudget,
-    WallTime,
-    TargetReached,
-    Shutdown,
-}
-
-/// One line of the fitness history: an island after an epoch.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct HistoryRow {
-    pub epoch: usize,
-    pub evaluations: u64,
-    pub wall_seconds: f64,
-    pub resolution: String,
-    pub island: u32,
-    pub best_fitness: Option<f64>,
-    pub best_rms_percent: Option<f64>,
-    pub mean_fitness: Option<f64>,
-    pub replacements: usize,
-}
-
-/// What a finished run hands back (and writes to its results folder).
-#[derive(Debug)]
-pub struct RunSummary {
-    pub stop: StopReason,
-    pub epochs: usize,
-    pub evaluations: u64,
-    pub wall_seconds: f64,
-    pub dims: GridDims,
-    /// Every island's final population, in slot order.
-    pub populations: Vec<Vec<Individual>>,
-    pub history: Vec<HistoryRow>,
-}
-
-impl RunSummary {
-    /// The fittest individual of the run (the lowest island, then slot, on a tie).
-    pub fn best(&self) -> &Individual {
-        let mut best = &self.populations[0][0];
-        for ind in self.populations.iter().flatten() {
-            if ind.outcome.is_fitter_than(&best.outcome) {
-                best = ind;
-            }
-        }
-        best
-    }
-}
 
 /// The state of a search between epochs.
 struct Search {
@@ -216,7 +166,7 @@ pub fn run(
     let budget = &raw.budget;
     let stop = loop {
         let dims = schedule.dims(search.resolution.level);
-        if let Some(reason) = stop_reason(config, &search, ctx.shutdown) {
+        if let Some(reason) = stop_reason(config, &scene, &search, ctx.shutdown) {
             break reason;
         }
         // Breed every island's epoch from its snapshot, evaluate all children as one batch.
@@ -246,6 +196,7 @@ pub fn run(
         {
             let replacements = island.apply(children, outcomes);
             let row = history_row(
+                &scene,
                 island,
                 search.epoch,
                 search.evaluations,
@@ -278,12 +229,12 @@ pub fn run(
         let island_bests: Vec<Option<String>> = search
             .islands
             .iter()
-            .map(|i| i.best().outcome.headline())
+            .map(|i| scene.headline(&i.best().outcome))
             .collect();
         let status = evaluator.status();
         progress.epoch(
             search.epoch,
-            best.outcome.headline(),
+            scene.headline(&best.outcome),
             dims,
             &island_bests,
             status.as_deref(),
@@ -292,7 +243,7 @@ pub fn run(
             epoch = search.epoch,
             evaluations = search.evaluations,
             resolution = %dims,
-            best = best.outcome.headline().as_deref().unwrap_or("-"),
+            best = scene.headline(&best.outcome).as_deref().unwrap_or("-"),
             islands = ?island_bests,
             cluster = status.as_deref().unwrap_or("-"),
             "epoch done"
@@ -348,7 +299,12 @@ pub fn run(
     Ok(summary)
 }
 
-fn stop_reason(config: &RunConfig, search: &Search, shutdown: &AtomicBool) -> Option<StopReason> {
+fn stop_reason(
+    config: &RunConfig,
+    scene: &Scene,
+    search: &Search,
+    shutdown: &AtomicBool,
+) -> Option<StopReason> {
     let budget = &config.raw.budget;
     if shutdown.load(Ordering::Relaxed) {
         return Some(StopReason::Shutdown);
@@ -369,13 +325,11 @@ fn stop_reason(config: &RunConfig, search: &Search, shutdown: &AtomicBool) -> Op
     {
         return Some(StopReason::WallTime);
     }
-    let best_rms = best_of(&search.islands)
-        .outcome
-        .beam_metrics()
-        .map(|m| m.rms_percent);
-    if let (Some(target), Some(rms)) = (budget.target_rms_percent, best_rms)
+    // The task's stop rule, at the final resolution only (a coarse level's error is not the
+    // design's).
+    if let Some(target) = budget.target_rms_percent
         && search.resolution.is_final(&config.raw.resolution)
-        && rms <= target
+        && scene.meets_target(&best_of(&search.islands).outcome, target)
     {
         return Some(StopReason::TargetReached);
     }
@@ -520,16 +474,11 @@ fn record_epoch(
 }
 
 fn best_of(islands: &[Island]) -> &Individual {
-    let mut best = islands[0].best();
-    for island in &islands[1..] {
-        if island.best().outcome.is_fitter_than(&best.outcome) {
-            best = island.best();
-        }
-    }
-    best
+    fittest(islands.iter().map(|i| i.best()))
 }
 
 fn history_row(
+    scene: &Scene,
     island: &Island,
     epoch: usize,
     evaluations: u64,
@@ -550,7 +499,7 @@ fn history_row(
         resolution: dims.to_string(),
         island: island.id.0,
         best_fitness: best.outcome.fitness(),
-        best_rms_percent: best.outcome.beam_metrics().map(|m| m.rms_percent),
+        best_figure: scene.figure(&best.outcome),
         mean_fitness: (!valid.is_empty()).then(|| valid.iter().sum::<f64>() / valid.len() as f64),
         replacements,
     }

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use amorph::genome::Genome;
-use amorph::outcome::Outcome;
+use amorph::task::Outcome;
 use rusqlite::{Connection, OptionalExtension, params};
 
 use crate::config::RunConfig;

@@ -4,8 +4,9 @@
 
 use amorph::genome::{GaussianPoint, Genome};
 use amorph::material::MaterialId;
-use amorph::outcome::{Failure, Metrics, Outcome};
-use amorph::scene::Scene;
+use amorph::outcome::Failure;
+use amorph::task::Scene;
+use amorph::task::{Metrics, Outcome};
 use amorph::voxel::GridDims;
 
 use crate::v1;
@@ -254,9 +255,9 @@ pub fn scene_from_wire(json: &[u8]) -> Result<Scene> {
         field: "scene_json",
         message: e.to_string(),
     })?;
-    scene.validate().map_err(|message| WireError::Malformed {
+    scene.validate().map_err(|e| WireError::Malformed {
         field: "scene_json",
-        message,
+        message: e.to_string(),
     })?;
     Ok(scene)
 }
@@ -275,7 +276,7 @@ pub fn scene_id(scene: &Scene) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use amorph::beam::BeamMetrics;
+    use amorph::task::beam::BeamMetrics;
 
     fn genome() -> Genome {
         Genome::new(vec![GaussianPoint {

@@ -13,9 +13,10 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use amorph::dynamics::{DynamicScene, Pass, Simulation, foam_palette, simulate_locomotion};
+use amorph::dynamics::{DynamicScene, Pass, Simulation, foam_palette};
 use amorph::genome::{GenomeLimits, random_genome};
 use amorph::material::{Material, MaterialId, Palette};
+use amorph::task::locomotion::{LocomotionProtocol, SettleRule, simulate_locomotion};
 use amorph::voxel::{DEFAULT_THRESHOLD, GridDims, VoxelGrid, keep_largest_component, voxelize};
 use criterion::{Criterion, Throughput};
 use rand::SeedableRng;
@@ -207,7 +208,8 @@ fn paper_evaluation() {
     for (name, grid) in [("paper-sized", paper_sized), ("largest", largest)] {
         let scene = DynamicScene::paper_locomotion();
         let start = Instant::now();
-        let outcome = simulate_locomotion(grid, &foam_palette(), &scene);
+        let protocol = LocomotionProtocol::default();
+        let outcome = simulate_locomotion(grid, &foam_palette(), &scene, &protocol);
         let wall = start.elapsed().as_secs_f64();
         println!(
             "paper-style evaluation, {name} robot: {} voxels, {} steps ({:.3} s simulated, settled \
@@ -316,16 +318,19 @@ fn locomotion_run(r: usize, dt_fraction: f64) -> StudyPoint {
     let scene = DynamicScene {
         voxel_size: 0.02 / r as f64,
         dt_fraction,
+        ..DynamicScene::paper_locomotion()
+    };
+    let protocol = LocomotionProtocol {
         actuation_cycles: 3,
-        settle: amorph::dynamics::SettleRule {
+        settle: SettleRule {
             max_time: 0.1,
             still_speed: 0.0,
             check_interval: 0.01,
         },
-        ..DynamicScene::paper_locomotion()
+        ..LocomotionProtocol::default()
     };
     let start = Instant::now();
-    let outcome = simulate_locomotion(&grid, &foam_palette(), &scene);
+    let outcome = simulate_locomotion(&grid, &foam_palette(), &scene, &protocol);
     let wall = start.elapsed().as_secs_f64();
     StudyPoint {
         case: "locomotion",

@@ -3,14 +3,11 @@
 //! fabrication exports. Everything here is a pure function of its inputs: the same genome, scene and
 //! resolution give the same bits on any machine.
 
-pub mod beam;
 pub mod dynamics;
-pub mod evaluate;
 pub mod export;
 pub mod genome;
-pub mod locomotion;
 pub mod material;
 pub mod outcome;
-pub mod scene;
 pub mod statics;
+pub mod task;
 pub mod voxel;

@@ -1,10 +1,8 @@
-//! The result of one evaluation. A design that cannot be simulated is an outcome with a reason,
-//! never a panic and never a NaN fitness.
+//! The result of one evaluation, generic over the task's measurements: a design that cannot be
+//! simulated is an outcome with a reason, never a panic and never a NaN fitness. The tasks
+//! (`crate::task`) fill in the metrics; nothing here knows what they are.
 
 use serde::{Deserialize, Serialize};
-
-use crate::beam::BeamMetrics;
-use crate::locomotion::LocomotionMetrics;
 
 /// Why an evaluation produced no fitness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
@@ -28,26 +26,18 @@ pub enum Failure {
     Diverged { reason: String, time: f64 },
 }
 
-/// Task-specific measurements behind a fitness.
+/// What an evaluation returns: a fitness with the task's measurements `M` behind it, or a failure.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Metrics {
-    Beam(BeamMetrics),
-    Locomotion(LocomotionMetrics),
-}
-
-/// What a worker returns for a task.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Outcome {
-    Evaluated { fitness: f64, metrics: Metrics },
+pub enum Outcome<M> {
+    Evaluated { fitness: f64, metrics: M },
     Failed { failure: Failure },
 }
 
-impl Outcome {
+impl<M> Outcome<M> {
     /// An evaluated outcome. A non-finite fitness is turned into a failure, so no NaN ever reaches
     /// the search.
-    pub fn evaluated(fitness: f64, metrics: Metrics) -> Self {
+    pub fn evaluated(fitness: f64, metrics: M) -> Self {
         if fitness.is_finite() {
             Self::Evaluated { fitness, metrics }
         } else {
@@ -74,48 +64,27 @@ impl Outcome {
     }
 
     /// Whether this outcome is strictly fitter than `other` (the crowding replacement rule).
-    pub fn is_fitter_than(&self, other: &Outcome) -> bool {
+    pub fn is_fitter_than<N>(&self, other: &Outcome<N>) -> bool {
         self.rank() > other.rank()
     }
 
-    pub fn locomotion_metrics(&self) -> Option<&LocomotionMetrics> {
+    /// The measurements of an evaluated design.
+    pub fn metrics(&self) -> Option<&M> {
         match self {
-            Self::Evaluated {
-                metrics: Metrics::Locomotion(m),
-                ..
-            } => Some(m),
-            _ => None,
-        }
-    }
-
-    /// The task's headline figure for progress lines and summaries: the beam's RMS error, or the
-    /// robot's speed.
-    pub fn headline(&self) -> Option<String> {
-        match self {
-            Self::Evaluated {
-                metrics: Metrics::Beam(m),
-                ..
-            } => Some(format!("RMS {:.3} %", m.rms_percent)),
-            Self::Evaluated {
-                metrics: Metrics::Locomotion(m),
-                ..
-            } => Some(format!(
-                "gait {:.2} mm ({:.2} % body length/cycle), travel {:.2} mm",
-                1e3 * m.gait_displacement,
-                m.speed_percent_per_cycle,
-                1e3 * m.displacement
-            )),
+            Self::Evaluated { metrics, .. } => Some(metrics),
             Self::Failed { .. } => None,
         }
     }
 
-    pub fn beam_metrics(&self) -> Option<&BeamMetrics> {
+    /// The same outcome with its measurements mapped, e.g. a task's own metrics into the
+    /// registry's enum.
+    pub fn map<N>(self, f: impl FnOnce(M) -> N) -> Outcome<N> {
         match self {
-            Self::Evaluated {
-                metrics: Metrics::Beam(m),
-                ..
-            } => Some(m),
-            _ => None,
+            Self::Evaluated { fitness, metrics } => Outcome::Evaluated {
+                fitness,
+                metrics: f(metrics),
+            },
+            Self::Failed { failure } => Outcome::Failed { failure },
         }
     }
 }

@@ -2,10 +2,10 @@
 //! volume, and divergence as a typed outcome.
 
 use amorph::dynamics::{
-    Actuation, DampingParams, DivergenceReason, DynamicScene, Floor, LocomotionStatus, Simulation,
-    foam_palette, simulate_locomotion,
+    Actuation, DampingParams, DivergenceReason, DynamicScene, Floor, Simulation, foam_palette,
 };
 use amorph::material::{Material, MaterialId, Palette};
+use amorph::task::locomotion::{LocomotionProtocol, LocomotionStatus, simulate_locomotion};
 use amorph::voxel::{GridDims, VoxelGrid};
 
 const G: f64 = 9.81;
@@ -136,7 +136,12 @@ fn divergence_is_an_outcome_with_reason_and_time() {
         dt_fraction: 20.0, // far beyond the stable step
         ..DynamicScene::paper_locomotion()
     };
-    let outcome = simulate_locomotion(&grid, &foam_palette(), &scene);
+    let outcome = simulate_locomotion(
+        &grid,
+        &foam_palette(),
+        &scene,
+        &LocomotionProtocol::default(),
+    );
     match &outcome.status {
         LocomotionStatus::Diverged { reason, time } => {
             assert!(time.is_finite() && *time > 0.0);
@@ -157,6 +162,11 @@ fn divergence_is_an_outcome_with_reason_and_time() {
 #[test]
 fn empty_design_is_an_outcome() {
     let grid = VoxelGrid::empty(GridDims::new(3, 3, 3));
-    let outcome = simulate_locomotion(&grid, &foam_palette(), &DynamicScene::paper_locomotion());
+    let outcome = simulate_locomotion(
+        &grid,
+        &foam_palette(),
+        &DynamicScene::paper_locomotion(),
+        &LocomotionProtocol::default(),
+    );
     assert_eq!(outcome.status, LocomotionStatus::Empty);
 }

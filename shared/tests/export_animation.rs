@@ -2,14 +2,15 @@
 //! simulation is bit for bit the evaluation), the GIF decodes into moving, non-blank frames in
 //! the materials' colours, and the trajectory plot shows both panels.
 
-use amorph::dynamics::{LocomotionPhase, simulate_locomotion, simulate_locomotion_observed};
 use amorph::export::{
     AnimationOptions, RecordingOptions, animation_gif, record_locomotion, trajectory_csv,
     trajectory_plot,
 };
 use amorph::genome::{GaussianPoint, Genome};
-use amorph::locomotion::{LocomotionScene, locomotion_design};
 use amorph::material::MaterialId;
+use amorph::task::locomotion::{
+    LocomotionPhase, LocomotionScene, simulate_locomotion, simulate_locomotion_observed,
+};
 use amorph::voxel::GridDims;
 
 /// A short walk of a two-material 6×6×6 body: passive at −x, actuated at +x. Settling and cycles
@@ -26,8 +27,8 @@ fn walker() -> (Genome, LocomotionScene, GridDims) {
         workspace: 0.008,
         ..LocomotionScene::default()
     };
-    scene.dynamics.actuation_cycles = 3;
-    scene.dynamics.settle.max_time = 0.02;
+    scene.actuation_cycles = 3;
+    scene.settle.max_time = 0.02;
     if let Some(a) = scene.dynamics.actuation.as_mut() {
         a.period = 0.02;
     }
@@ -37,12 +38,19 @@ fn walker() -> (Genome, LocomotionScene, GridDims) {
 #[test]
 fn observing_a_walk_leaves_it_bit_identical() {
     let (genome, scene, dims) = walker();
-    let body = locomotion_design(&genome, &scene, dims);
+    let body = amorph::task::design(&scene, &genome, dims);
     let dynamics = scene.dynamics_at(dims);
-    let plain = simulate_locomotion(&body, &scene.palette, &dynamics);
+    let protocol = scene.protocol();
+    let plain = simulate_locomotion(&body, &scene.palette, &dynamics, &protocol);
     let mut calls = 0;
-    let observed =
-        simulate_locomotion_observed(&body, &scene.palette, &dynamics, 7, &mut |_, _| calls += 1);
+    let observed = simulate_locomotion_observed(
+        &body,
+        &scene.palette,
+        &dynamics,
+        &protocol,
+        7,
+        &mut |_, _| calls += 1,
+    );
     assert_eq!(plain, observed);
     assert!(plain.completed_fitness().is_some());
     // Settling checks every 0.01 s for 0.02 s at most, the settled call, 7 per cycle.

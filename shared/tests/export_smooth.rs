@@ -9,9 +9,9 @@ use amorph::export::{
     write_binary_stl,
 };
 use amorph::genome::{GaussianPoint, Genome};
-use amorph::locomotion::LocomotionScene;
 use amorph::material::MaterialId;
-use amorph::scene::Scene;
+use amorph::task::Scene;
+use amorph::task::locomotion::LocomotionScene;
 use amorph::voxel::GridDims;
 
 /// Every directed edge used once and its reverse once (closed, 2-manifold, consistently

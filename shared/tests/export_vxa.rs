@@ -1,9 +1,10 @@
 //! VXA (VoxCAD/Voxelyze) export: a written design reads back identical, the scene's settings are
 //! in the file, and malformed files are refused with the element named.
 
-use amorph::dynamics::{DynamicScene, foam_palette};
+use amorph::dynamics::foam_palette;
 use amorph::export::{VxaDesign, read_vxa, write_vxa};
 use amorph::material::{MaterialId, Palette};
+use amorph::task::{SimulatorSettings, Task, locomotion::LocomotionScene};
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
 
@@ -21,6 +22,11 @@ fn design(cells: &[u8], dims: GridDims, palette: Palette) -> VxaDesign {
     }
 }
 
+/// The paper's robot task at 20x20x20, as `worker export` writes it.
+fn robot_settings() -> Option<SimulatorSettings> {
+    LocomotionScene::default().simulator_settings(GridDims::new(20, 20, 20))
+}
+
 proptest! {
     /// Write then read gives the same grid, palette (every mechanical number bit for bit:
     /// Rust prints the shortest decimal that parses back to the same f64) and voxel size.
@@ -31,7 +37,7 @@ proptest! {
     ) {
         let mut d = design(&cells, GridDims::new(3, 4, 5), foam_palette());
         d.voxel_size = size;
-        let text = write_vxa(&d, Some(&DynamicScene::paper_locomotion()));
+        let text = write_vxa(&d, robot_settings().as_ref());
         let back = read_vxa(&text).unwrap();
         prop_assert_eq!(back, d);
     }
@@ -40,8 +46,7 @@ proptest! {
 #[test]
 fn the_scene_settings_are_written_for_voxelyze() {
     let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
-    let scene = DynamicScene::paper_locomotion();
-    let text = write_vxa(&d, Some(&scene));
+    let text = write_vxa(&d, robot_settings().as_ref());
     let doc = roxmltree::Document::parse(&text).unwrap();
     let value = |name: &str| -> f64 {
         doc.descendants()

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use amorph::task::Metrics;
 use amorph_coordinator::RunConfig;
 use amorph_tests::{run_locally, scratch_dir};
 
@@ -29,9 +30,8 @@ levels = [[4, 4, 4]]
 [scene]
 kind = "locomotion"
 workspace = 0.008
-[scene.dynamics]
 actuation_cycles = 2
-[scene.dynamics.settle]
+[scene.settle]
 max_time = 0.02
 [scene.dynamics.actuation]
 period = 0.02
@@ -58,7 +58,10 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
         .populations
         .iter()
         .flatten()
-        .filter_map(|i| Some((i.outcome.fitness()?, i.outcome.locomotion_metrics()?)))
+        .filter_map(|i| match i.outcome.metrics()? {
+            Metrics::Locomotion(m) => Some((i.outcome.fitness()?, m)),
+            _ => None,
+        })
         .collect();
     assert!(!evaluated.is_empty(), "no design was evaluated");
     for (fitness, m) in &evaluated {
@@ -70,7 +73,7 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
         let total = m.centre_of_mass_trace[2][0] - m.centre_of_mass_trace[0][0];
         assert!((m.displacement - total).abs() <= 1e-15);
         assert!((m.gait_displacement - total).abs() <= 1e-12 * total.abs().max(1e-6));
-        let expected = 100.0 * m.gait_displacement / m.body_length / 2.0;
+        let expected: f64 = 100.0 * m.gait_displacement / m.body_length / 2.0;
         assert!((m.speed_percent_per_cycle - expected).abs() <= 1e-12 * expected.abs().max(1.0));
     }
 

@@ -14,8 +14,8 @@ use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
 
-use amorph::outcome::Outcome;
-use amorph::scene::Scene;
+use amorph::task::Outcome;
+use amorph::task::Scene;
 use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
 use amorph_proto::v1::{self, task_result};
 use amorph_proto::{MAX_MESSAGE_BYTES, PROTOCOL_VERSION, convert};

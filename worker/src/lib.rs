@@ -6,7 +6,7 @@ pub mod client;
 pub mod pool;
 
 pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
-pub use pool::{EvaluationMode, evaluate_caught};
+pub use pool::EvaluationMode;
 
 /// Resolves at the first Ctrl-C or SIGTERM (how a terminal, docker, Kubernetes and Slurm all ask a
 /// process to stop).
@@ -29,7 +29,7 @@ pub async fn termination() {
 use std::path::Path;
 
 use amorph::genome::Genome;
-use amorph::scene::Scene;
+use amorph::task::Scene;
 use amorph::voxel::GridDims;
 use serde::Deserialize;
 
@@ -91,9 +91,13 @@ pub fn read_scene(path: &Path) -> Result<Scene> {
             .try_into::<Scene>()
             .map_err(|e| parse_error(e.message().to_owned()))?
     };
+    let mut scene = scene;
+    scene
+        .load_files(path.parent().unwrap_or(Path::new(".")))
+        .map_err(|e| parse_error(format!("scene.{e}")))?;
     scene
         .validate()
-        .map_err(|m| parse_error(format!("scene: {m}")))?;
+        .map_err(|e| parse_error(format!("scene.{e}")))?;
     Ok(scene)
 }
 

@@ -1,14 +1,14 @@
 //! The CPU pool: evaluations run on plain threads of their own, never on the async runtime, so a
 //! long simulation cannot stall heartbeats or the network. One evaluation per thread at a time.
 
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use amorph::genome::Genome;
-use amorph::outcome::{Failure, Outcome};
-use amorph::scene::Scene;
+use amorph::outcome::Failure;
+use amorph::task::Outcome;
+use amorph::task::Scene;
 use amorph::voxel::GridDims;
 use tokio::sync::mpsc::UnboundedSender;
 
@@ -37,22 +37,6 @@ pub struct JobDone {
     pub task_id: u64,
     pub outcome: Outcome,
     pub wall_seconds: f64,
-}
-
-/// Evaluates one genome, turning a panic in the physics (a bug of ours) into a failed outcome so
-/// one bad design never brings a worker down.
-pub fn evaluate_caught(genome: &Genome, scene: &Scene, dims: GridDims) -> Outcome {
-    catch_unwind(AssertUnwindSafe(|| {
-        amorph::evaluate::evaluate(genome, scene, dims)
-    }))
-    .unwrap_or_else(|panic| {
-        let message = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown panic".into());
-        Outcome::failed(Failure::Internal(message))
-    })
 }
 
 /// `threads` evaluation threads fed from one queue. Dropping the pool lets each thread finish its
@@ -99,7 +83,7 @@ fn work(queue: &Mutex<Receiver<Job>>, mode: EvaluationMode, done: &UnboundedSend
         };
         let started = Instant::now();
         let outcome = match mode {
-            EvaluationMode::Physics => evaluate_caught(&job.genome, &job.scene, job.dims),
+            EvaluationMode::Physics => job.scene.evaluate(&job.genome, job.dims),
             EvaluationMode::Instant => Outcome::failed(Failure::Empty),
         };
         let finished = JobDone {

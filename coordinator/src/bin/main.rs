@@ -103,7 +103,11 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         }
     })?;
     let best = summary.best();
-    let headline = best.outcome.headline().unwrap_or_else(|| "-".into());
+    let headline = config
+        .raw
+        .scene
+        .headline(&best.outcome)
+        .unwrap_or_else(|| "-".into());
     println!(
         "{}: best {headline} at {} after {} evaluations in {:.1} s ({:?}); results in {}",
         config.raw.name,

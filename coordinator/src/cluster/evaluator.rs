@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use amorph::outcome::Outcome;
+use amorph::task::Outcome;
 
 use super::queue::TaskQueue;
 use crate::evaluator::{Completion, Evaluator, EvaluatorError, Task};

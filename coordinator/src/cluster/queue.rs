@@ -19,7 +19,8 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
-use amorph::outcome::{Failure, Outcome};
+use amorph::outcome::Failure;
+use amorph::task::Outcome;
 use tracing::{info, warn};
 
 use crate::evaluator::{Completion, Task};

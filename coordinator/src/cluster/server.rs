@@ -110,7 +110,7 @@ fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
 pub async fn start(
     options: &ServerOptions,
     queue: Arc<TaskQueue>,
-    scene: &amorph::scene::Scene,
+    scene: &amorph::task::Scene,
 ) -> Result<ServerHandle, ServerError> {
     let listener = tokio::net::TcpListener::bind(&options.listen)
         .await

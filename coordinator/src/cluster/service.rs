@@ -29,7 +29,7 @@ pub struct CoordinatorService {
 }
 
 impl CoordinatorService {
-    pub fn new(queue: Arc<TaskQueue>, scene: &amorph::scene::Scene) -> Self {
+    pub fn new(queue: Arc<TaskQueue>, scene: &amorph::task::Scene) -> Self {
         Self {
             queue,
             scene_id: convert::scene_id(scene),

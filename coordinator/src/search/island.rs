@@ -8,7 +8,7 @@ use amorph::genome::{
     CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate,
     random_genome,
 };
-use amorph::outcome::Outcome;
+use amorph::task::Outcome;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 

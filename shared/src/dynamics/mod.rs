@@ -1,4 +1,5 @@
-//! Dynamic analysis: the voxel soft-body simulator (paper §II-B) and the locomotion task (§IV).
+//! Dynamic analysis: the voxel soft-body simulator (paper §II-B). It knows nothing of fitness: the
+//! locomotion task (`crate::task::locomotion`) runs its protocol on it.
 //!
 //! Voxels carry position, orientation, momentum and angular momentum in flat arrays; links between
 //! face-adjacent voxels are co-rotational 3-D Euler–Bernoulli frame elements; semi-implicit Euler
@@ -12,7 +13,6 @@
 mod collide;
 mod error;
 mod link;
-mod locomotion;
 mod math;
 mod passes;
 mod poisson;
@@ -21,13 +21,6 @@ mod simulation;
 mod state;
 
 pub use error::{DynamicsError, Result};
-pub use locomotion::{
-    LocomotionOutcome, LocomotionPhase, LocomotionStatus, simulate_locomotion,
-    simulate_locomotion_observed,
-};
 pub use math::{Mat3, Quat, Vec3};
-pub use scene::{
-    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, LocomotionFitness, SettleRule,
-    foam_palette,
-};
+pub use scene::{Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, foam_palette};
 pub use simulation::{Divergence, DivergenceReason, Energy, Pass, Simulation};

@@ -22,12 +22,12 @@ pub struct DynamicScene {
     pub collisions: bool,
     /// Lateral Poisson coupling: a voxel stretched along one axis contracts along the others by
     /// its material's ν (see `poisson.rs`). Default false. On, a bulk body has Young's modulus E
-    /// and lateral contraction ν (test `dynamics_poisson`), but a section only two voxels thick
-    /// locks in bending: the one link across it measures the mean lateral strain, zero in
-    /// bending, so the 2×2×20 cantilever deflects 12 % less than beam theory. It also stiffens
-    /// confined links to the P-wave modulus (1.60 E at ν = 0.35), shortening the automatic time
-    /// step by 1/√1.60 = 0.79, and adds a pass. Off, ν enters only the shear and torsion
-    /// stiffness (G = E/(2(1+ν))) and the lattice's effective Poisson's ratio is 0.
+    /// and lateral contraction ν in its interior (test `dynamics_poisson`); only axes along which
+    /// a voxel has links on both sides couple, so a section one or two voxels thick behaves as
+    /// without the coupling and does not lock in bending. It stiffens confined links to the
+    /// P-wave modulus (1.60 E at ν = 0.35), shortening the automatic time step by 1/√1.60 = 0.79,
+    /// and adds a pass. Off, ν enters only the shear and torsion stiffness (G = E/(2(1+ν))) and
+    /// the lattice's effective Poisson's ratio is 0.
     pub poisson: bool,
     /// Volumetric actuation of the palette's actuated materials, or none.
     pub actuation: Option<Actuation>,
@@ -38,12 +38,6 @@ pub struct DynamicScene {
     /// ω_top² ≈ 13.1 k/m, h = ω_top dt < 2); with damping ratio ζ on that mode it needs
     /// h² + 4ζh ≤ 4 (f ≈ 1.4 at ζ = 1, by this mode analysis). Smaller f buys accuracy with proportionally more steps.
     pub dt_fraction: f64,
-    /// How the body settles under gravity before actuation starts (locomotion only).
-    pub settle: SettleRule,
-    /// Number of actuation cycles after settling (locomotion only). Default 10 (the paper's).
-    pub actuation_cycles: u32,
-    /// How the centre of mass's travel becomes the fitness (locomotion only).
-    pub fitness: LocomotionFitness,
     /// When a run counts as diverged.
     pub divergence: DivergenceLimits,
 }
@@ -59,29 +53,9 @@ impl Default for DynamicScene {
             actuation: None,
             damping: DampingParams::default(),
             dt_fraction: 1.0,
-            settle: SettleRule::default(),
-            actuation_cycles: 10,
-            fitness: LocomotionFitness::default(),
             divergence: DivergenceLimits::default(),
         }
     }
-}
-
-/// How a locomotion evaluation turns the centre of mass's per-cycle travel along +X into a fitness.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LocomotionFitness {
-    /// The median of the per-cycle travels times the number of cycles (default). For a periodic
-    /// gait it equals the total travel; a one-off jump does not count. Why: random and early
-    /// designs are often tall bodies that the actuation tips over, and a topple moves the centre
-    /// of mass by about the body's height in one or two cycles (measured: 10–17 mm, 5–12 % of
-    /// body length per cycle, in the first 100 evaluations of `configs/locomotion.toml`), more
-    /// than any gait; scored on total travel, evolution breeds bodies that fall over.
-    #[default]
-    SteadyGait,
-    /// The paper's literal measure: centre of mass at the end of the last cycle minus at the end of
-    /// settling.
-    TotalDisplacement,
 }
 
 /// A rigid, flat floor at z = 0 with penalty contact and Coulomb friction (coefficients come from
@@ -94,8 +68,11 @@ pub struct Floor {
     /// stable time step is unchanged. Larger values stiffen contact and shorten the stable step.
     pub stiffness_factor: f64,
     /// Incline of the floor, rad: the floor stays at z = 0 and gravity is tilted by this angle
-    /// about +Y, so "downhill" is +X. Default 0.
+    /// away from −Z towards `downhill`. Default 0.
     pub incline: f64,
+    /// The direction in the floor plane that is downhill, rad from +X towards +Y. Default 0
+    /// (downhill is +X).
+    pub downhill: f64,
 }
 
 impl Default for Floor {
@@ -103,6 +80,7 @@ impl Default for Floor {
         Self {
             stiffness_factor: 1.0,
             incline: 0.0,
+            downhill: 0.0,
         }
     }
 }
@@ -162,30 +140,6 @@ impl Default for DampingParams {
     }
 }
 
-/// When settling under gravity ends: when every voxel is slower than `still_speed`, checked every
-/// `check_interval` seconds, or at `max_time`, whichever comes first.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SettleRule {
-    /// Longest settling time, s. Default 0.5 (the reference evaluation's).
-    pub max_time: f64,
-    /// Speed under which the body counts as still, m/s. Default 1e-3 (one voxel per second at
-    /// 1 mm voxels). 0 means always settle for `max_time`.
-    pub still_speed: f64,
-    /// How often stillness is checked, s. Default 0.01.
-    pub check_interval: f64,
-}
-
-impl Default for SettleRule {
-    fn default() -> Self {
-        Self {
-            max_time: 0.5,
-            still_speed: 1e-3,
-            check_interval: 0.01,
-        }
-    }
-}
-
 /// Limits past which a simulation is declared diverged (checked every step).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -209,7 +163,7 @@ impl Default for DivergenceLimits {
 
 impl DynamicScene {
     /// The paper's locomotion setup (§IV): floor with gravity, ±20 % volume actuation at a
-    /// 0.07 s period, 10 cycles after settling. Use it with [`foam_palette`].
+    /// 0.07 s period. Use it with [`foam_palette`].
     pub fn paper_locomotion() -> Self {
         Self {
             actuation: Some(Actuation::default()),
@@ -254,6 +208,7 @@ impl DynamicScene {
                 f.incline,
                 f.incline.abs() < std::f64::consts::FRAC_PI_2,
             )?;
+            check("floor.downhill", f.downhill, true)?;
         }
         if let Some(a) = &self.actuation {
             check(
@@ -269,14 +224,6 @@ impl DynamicScene {
         check("damping.global", d.global, d.global >= 0.0)?;
         check("damping.contact", d.contact, d.contact >= 0.0)?;
         check("dt_fraction", self.dt_fraction, self.dt_fraction > 0.0)?;
-        let s = &self.settle;
-        check("settle.max_time", s.max_time, s.max_time >= 0.0)?;
-        check("settle.still_speed", s.still_speed, s.still_speed >= 0.0)?;
-        check(
-            "settle.check_interval",
-            s.check_interval,
-            s.check_interval > 0.0,
-        )?;
         let v = &self.divergence;
         check("divergence.max_strain", v.max_strain, v.max_strain > 0.0)?;
         check(

@@ -116,12 +116,10 @@ impl Simulation {
                 p.z -= lowest - 0.5 * s;
             }
         }
-        let incline = scene.floor.as_ref().map_or(0.0, |f| f.incline);
-        let gravity = Vec3::new(
-            scene.gravity * incline.sin(),
-            0.0,
-            -scene.gravity * incline.cos(),
-        );
+        let gravity = match &scene.floor {
+            Some(f) => tilted_gravity(scene.gravity, f.incline, f.downhill),
+            None => Vec3::new(0.0, 0.0, -scene.gravity),
+        };
         let mut floor = FloorContact::default();
         if let Some(f) = &scene.floor {
             floor.stiffness = voxels
@@ -242,7 +240,7 @@ impl Simulation {
         Ok(())
     }
 
-    /// Tilts the floor to `incline` rad (gravity turns about +Y, "downhill" is +X), e.g. to raise
+    /// Tilts the floor to `incline` rad towards the floor's `downhill` direction, e.g. to raise
     /// an incline slowly as in a tilt-table friction measurement. Needs a floor and
     /// |incline| < π/2.
     pub fn set_incline(&mut self, incline: f64) -> Result<()> {
@@ -254,8 +252,7 @@ impl Simulation {
             });
         };
         floor.incline = incline;
-        let g = self.scene.gravity;
-        self.gravity = Vec3::new(g * incline.sin(), 0.0, -g * incline.cos());
+        self.gravity = tilted_gravity(self.scene.gravity, incline, floor.downhill);
         Ok(())
     }
 
@@ -515,6 +512,22 @@ impl Simulation {
             gravitational,
             contact,
         }
+    }
+}
+
+/// Gravity of magnitude `g` tilted by `incline` rad from −Z towards the floor direction
+/// `downhill` (rad from +X towards +Y). Downhill along +X is computed without the azimuth's
+/// sine and cosine, so scenes written before the azimuth existed keep their bits.
+fn tilted_gravity(g: f64, incline: f64, downhill: f64) -> Vec3 {
+    let along = g * incline.sin();
+    if downhill == 0.0 {
+        Vec3::new(along, 0.0, -g * incline.cos())
+    } else {
+        Vec3::new(
+            along * downhill.cos(),
+            along * downhill.sin(),
+            -g * incline.cos(),
+        )
     }
 }
 

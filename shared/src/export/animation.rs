@@ -16,10 +16,11 @@ use std::io::Write;
 use super::plot::{line, text};
 use super::recording::{LocomotionRecording, RecordingOptions, record_locomotion};
 use super::render::{Image, fill_quad};
-use crate::dynamics::{LocomotionPhase, Quat, Vec3};
+use crate::dynamics::{Quat, Vec3};
 use crate::genome::Genome;
-use crate::locomotion::LocomotionScene;
 use crate::material::Palette;
+use crate::task::locomotion::LocomotionPhase;
+use crate::task::locomotion::LocomotionScene;
 use crate::voxel::GridDims;
 
 /// Brightness of faces whose normal points mostly up, along +x and along +y (as the still render).

@@ -57,7 +57,7 @@ pub fn material_meshes_mm(
 pub fn write_fabrication_files(
     dir: &std::path::Path,
     grid: &VoxelGrid,
-    scene: &crate::scene::Scene,
+    scene: &crate::task::Scene,
 ) -> std::io::Result<Vec<std::path::PathBuf>> {
     use std::path::PathBuf;
     let palette = scene.palette();
@@ -78,17 +78,13 @@ pub fn write_fabrication_files(
         std::io::Write::flush(&mut file)?;
         written.push(name);
     }
-    let dynamics = match scene {
-        crate::scene::Scene::Locomotion(l) => Some(l.dynamics_at(grid.dims())),
-        crate::scene::Scene::Beam(_) => None,
-    };
     let vxa = write_vxa(
         &VxaDesign {
             grid: grid.clone(),
             palette: palette.clone(),
             voxel_size,
         },
-        dynamics.as_ref(),
+        scene.simulator_settings(grid.dims()).as_ref(),
     );
     std::fs::write(dir.join("design.vxa"), vxa)?;
     written.push(PathBuf::from("design.vxa"));
@@ -115,7 +111,7 @@ pub fn write_fabrication_files(
 pub fn write_smooth_surfaces(
     dir: &std::path::Path,
     genome: &crate::genome::Genome,
-    scene: &crate::scene::Scene,
+    scene: &crate::task::Scene,
     dims: crate::voxel::GridDims,
     samples_longest: usize,
 ) -> std::io::Result<Vec<std::path::PathBuf>> {
@@ -141,37 +137,6 @@ pub fn write_smooth_surfaces(
         written.push(name);
     }
     Ok(written)
-}
-
-/// Writes the pictures of a walking robot into `dir` from one extra simulation of it:
-/// `animation.gif` (the robot moving), `trajectory.png` (its centre of mass against time and seen
-/// from above) and `trajectory.csv` (the samples). Returns the files written, relative to `dir`.
-pub fn write_locomotion_pictures(
-    dir: &std::path::Path,
-    genome: &crate::genome::Genome,
-    scene: &crate::locomotion::LocomotionScene,
-    dims: crate::voxel::GridDims,
-) -> std::io::Result<Vec<std::path::PathBuf>> {
-    std::fs::create_dir_all(dir)?;
-    let mut gif = Vec::new();
-    let recording = write_locomotion_animation(
-        genome,
-        scene,
-        dims,
-        RecordingOptions::default(),
-        AnimationOptions::default(),
-        &mut gif,
-    )
-    .map_err(std::io::Error::other)?;
-    std::fs::write(dir.join("animation.gif"), gif)?;
-    let png = trajectory_plot(&recording)
-        .to_png()
-        .map_err(std::io::Error::other)?;
-    std::fs::write(dir.join("trajectory.png"), png)?;
-    std::fs::write(dir.join("trajectory.csv"), trajectory_csv(&recording))?;
-    Ok(["animation.gif", "trajectory.png", "trajectory.csv"]
-        .map(std::path::PathBuf::from)
-        .to_vec())
 }
 
 fn file_safe(name: &str) -> String {

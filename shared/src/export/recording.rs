@@ -3,12 +3,12 @@
 //! and keeps every voxel's position and orientation at animation frames. Evaluations never pay
 //! for this: only reports and `worker export` call it.
 
-use crate::dynamics::{
-    LocomotionOutcome, LocomotionPhase, Simulation, simulate_locomotion_observed,
-};
+use crate::dynamics::Simulation;
 use crate::genome::Genome;
-use crate::locomotion::{LocomotionScene, locomotion_design};
 use crate::material::MaterialId;
+use crate::task::design;
+use crate::task::locomotion::LocomotionScene;
+use crate::task::locomotion::{LocomotionOutcome, LocomotionPhase, simulate_locomotion_observed};
 use crate::voxel::GridDims;
 
 /// How densely to record.
@@ -84,7 +84,7 @@ pub fn record_locomotion(
     dims: GridDims,
     options: RecordingOptions,
 ) -> LocomotionRecording {
-    let body = locomotion_design(genome, scene, dims);
+    let body = design(scene, genome, dims);
     let dynamics = scene.dynamics_at(dims);
     // Taken from the simulation itself at its first call, so they follow its voxel order.
     let mut cells: Vec<[u16; 3]> = Vec::new();
@@ -134,6 +134,7 @@ pub fn record_locomotion(
         &body,
         &scene.palette,
         &dynamics,
+        &scene.protocol(),
         options.samples_per_cycle,
         &mut observe,
     );
@@ -141,7 +142,7 @@ pub fn record_locomotion(
         voxel_size: dynamics.voxel_size,
         cells,
         materials,
-        cycles: dynamics.actuation_cycles,
+        cycles: scene.actuation_cycles,
         period: dynamics.actuation.as_ref().map_or(0.0, |a| a.period),
         centre_of_mass,
         frames,

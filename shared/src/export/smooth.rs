@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use super::mesh::TriangleMesh;
 use crate::genome::Genome;
-use crate::scene::Scene;
+use crate::task::Scene;
 use crate::voxel::{GridDims, VoxelGrid, density_fields};
 
 /// A sampled field is inside where its value is above zero (zero itself counts as outside, so
@@ -192,10 +192,7 @@ pub fn smooth_material_meshes(
     let r = samples_per_voxel.max(1);
     let sample_dims = GridDims::new(dims.nx * r, dims.ny * r, dims.nz * r);
     let materials = scene.palette().len();
-    let threshold = match scene {
-        Scene::Beam(b) => b.threshold,
-        Scene::Locomotion(l) => l.threshold,
-    };
+    let threshold = scene.threshold();
     let fields = density_fields(genome, sample_dims, materials);
     let kept = near_design(&scene.design(genome, dims));
     let cells = sample_dims.cell_count();

@@ -5,7 +5,7 @@
 use super::plot::{PlotSpec, Series, line_plot, line_plot_over};
 use super::recording::LocomotionRecording;
 use super::render::Image;
-use crate::dynamics::LocomotionPhase;
+use crate::task::locomotion::LocomotionPhase;
 
 const SETTLING: [u8; 3] = [150, 150, 150];
 const ACTUATION: [u8; 3] = [31, 119, 180];

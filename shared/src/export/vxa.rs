@@ -10,6 +10,7 @@ use std::fmt::Write;
 
 use crate::dynamics::DynamicScene;
 use crate::material::{Material, MaterialId, Palette};
+use crate::task::SimulatorSettings;
 use crate::voxel::{GridDims, VoxelGrid};
 
 /// A design as VXA describes it.
@@ -37,18 +38,18 @@ pub enum VxaError {
     Layer { layer: usize, message: String },
 }
 
-/// Writes a design as VXA. With a dynamic `scene`, its gravity, floor, damping, time-step fraction
-/// and actuation go into the simulator and environment sections, and the stop time is the settle
-/// time plus the actuation cycles.
-pub fn write_vxa(design: &VxaDesign, scene: Option<&DynamicScene>) -> String {
+/// Writes a design as VXA. With a dynamic task's `settings`, its gravity, floor, damping,
+/// time-step fraction and actuation go into the simulator and environment sections, with the
+/// task's stop time (settling plus the actuation cycles).
+pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> String {
     let mut x = String::new();
     let w = &mut x;
     // fmt::Write on a String cannot fail.
     let _ = writeln!(w, r#"<?xml version="1.0" encoding="ISO-8859-1"?>"#);
     let _ = writeln!(w, r#"<VXA Version="1.1">"#);
-    if let Some(scene) = scene {
-        write_simulator(w, scene);
-        write_environment(w, scene);
+    if let Some(settings) = settings {
+        write_simulator(w, &settings.scene, settings.stop_time);
+        write_environment(w, &settings.scene);
     }
     let _ = writeln!(w, r#"<VXC Version="0.94">"#);
     let _ = writeln!(
@@ -61,8 +62,8 @@ pub fn write_vxa(design: &VxaDesign, scene: Option<&DynamicScene>) -> String {
         "<Voxel><Vox_Name>BOX</Vox_Name><X_Squeeze>1</X_Squeeze><Y_Squeeze>1</Y_Squeeze><Z_Squeeze>1</Z_Squeeze></Voxel>"
     );
     let _ = writeln!(w, "<Palette>");
-    let amplitude = scene
-        .and_then(|s| s.actuation.as_ref())
+    let amplitude = settings
+        .and_then(|s| s.scene.actuation.as_ref())
         .map_or(0.0, |a| (1.0 + a.amplitude_volume).cbrt() - 1.0);
     for (id, m) in design.palette.iter() {
         let cte = if m.actuated { amplitude } else { 0.0 };
@@ -105,12 +106,7 @@ pub fn write_vxa(design: &VxaDesign, scene: Option<&DynamicScene>) -> String {
     x
 }
 
-fn write_simulator(w: &mut String, scene: &DynamicScene) {
-    let stop_time = scene.settle.max_time
-        + scene
-            .actuation
-            .as_ref()
-            .map_or(0.0, |a| a.period * f64::from(scene.actuation_cycles));
+fn write_simulator(w: &mut String, scene: &DynamicScene, stop_time: f64) {
     let d = &scene.damping;
     let _ = writeln!(
         w,

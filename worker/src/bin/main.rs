@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use amorph::genome::Genome;
-use amorph::scene::Scene;
+use amorph::task::Scene;
 use amorph::voxel::GridDims;
 use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
 use anyhow::Context;
@@ -129,7 +129,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     match command {
         Command::Evaluate { design } => {
             let (genome, scene, dims) = design.load()?;
-            let outcome = amorph_worker::evaluate_caught(&genome, &scene, dims);
+            let outcome = scene.evaluate(&genome, dims);
             println!(
                 "{}",
                 serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
@@ -155,16 +155,18 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                         })?,
                 );
             }
-            if let Scene::Locomotion(robot) = &scene {
-                files.extend(
-                    amorph::export::write_locomotion_pictures(&out, &genome, robot, dims)
-                        .with_context(|| format!("animating the robot into {}", out.display()))?,
-                );
-            }
+            // The task's own pictures (a beam's profile, a robot's walk) need its evaluation.
+            let outcome = scene.evaluate(&genome, dims);
+            let artefacts = scene
+                .write_artefacts(&out, &genome, dims, &outcome)
+                .with_context(|| format!("writing the task's pictures into {}", out.display()))?;
             println!(
-                "{} voxels; wrote {} files into {}",
+                "{} voxels, {}; wrote {} files into {}",
                 grid.filled_count(),
-                files.len(),
+                scene
+                    .headline(&outcome)
+                    .unwrap_or_else(|| format!("{outcome:?}")),
+                files.len() + artefacts.len(),
                 out.display()
             );
         }

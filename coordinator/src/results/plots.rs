@@ -1,0 +1,62 @@
+//! The progress plots of a run: the best of each island against evaluations and against wall
+//! time, on the task's figure.
+
+use std::path::Path;
+
+use amorph::export::{PlotSpec, Series, line_plot};
+use amorph::task::Figure;
+
+use crate::summary::{HistoryRow, RunSummary};
+
+/// Colours of the islands' lines, cycled past six.
+const ISLAND_COLOURS: [[u8; 3]; 6] = [
+    [31, 119, 180],
+    [214, 39, 40],
+    [44, 160, 44],
+    [148, 103, 189],
+    [255, 127, 14],
+    [23, 190, 207],
+];
+
+/// progress_evaluations.png and progress_wall_time.png.
+pub(super) fn write_progress(
+    dir: &Path,
+    name: &str,
+    summary: &RunSummary,
+    figure: Figure,
+) -> std::io::Result<()> {
+    let islands = summary.populations.len();
+    let plot = |x_of: &dyn Fn(&HistoryRow) -> f64, x_label: &str| {
+        let series: Vec<Series> = (0..islands)
+            .map(|i| Series {
+                label: format!("island {i}"),
+                colour: ISLAND_COLOURS[i % ISLAND_COLOURS.len()],
+                markers: false,
+                points: summary
+                    .history
+                    .iter()
+                    .filter(|r| r.island as usize == i)
+                    .filter_map(|r| Some([x_of(r), r.best_figure?]))
+                    .collect(),
+            })
+            .collect();
+        let spec = PlotSpec {
+            title: format!("{name}: best design per island"),
+            x_label: x_label.into(),
+            y_label: figure.axis.into(),
+            log_x: false,
+            log_y: figure.log,
+        };
+        line_plot(&spec, &series)
+            .to_png()
+            .map_err(std::io::Error::other)
+    };
+    std::fs::write(
+        dir.join("progress_evaluations.png"),
+        plot(&|r| r.evaluations as f64, "EVALUATIONS")?,
+    )?;
+    std::fs::write(
+        dir.join("progress_wall_time.png"),
+        plot(&|r| r.wall_seconds, "WALL TIME (S)")?,
+    )
+}

@@ -1,0 +1,131 @@
+//! The beam designer's task (paper §III): cantilevers that deflect into a prescribed profile.
+
+mod custom;
+mod evaluate;
+mod report;
+mod scene;
+mod target;
+
+use std::path::Path;
+
+pub use custom::{CustomProfile, Interpolation, MAX_PROFILE_POINTS, TargetError};
+pub use evaluate::simulate_beam;
+pub use scene::{BeamMetrics, BeamScene};
+pub use target::{NamedProfile, TargetProfile};
+
+use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use crate::export::Block;
+use crate::genome::{Genome, GenomeLimits};
+use crate::material::Palette;
+use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
+
+impl Task for BeamScene {
+    type Metrics = BeamMetrics;
+
+    const FIGURE: Figure = Figure {
+        column: "rms_percent",
+        axis: "RMS ERROR (% OF TIP DEFLECTION)",
+        log: true,
+    };
+    const HAS_TARGET: bool = true;
+
+    fn validate(&self) -> Result<(), SceneError> {
+        BeamScene::validate(self)
+    }
+
+    fn load_files(&mut self, base_dir: &Path) -> Result<(), SceneError> {
+        match &mut self.target {
+            TargetProfile::Custom(p) => p
+                .load_csv(base_dir)
+                .map_err(|e| SceneError::new("target", e.to_string())),
+            TargetProfile::Named(_) => Ok(()),
+        }
+    }
+
+    fn palette(&self) -> &Palette {
+        &self.palette
+    }
+
+    fn limits(&self) -> &GenomeLimits {
+        &self.limits
+    }
+
+    fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// The beam is a physical length along Y: the voxel size is that over the layer count.
+    fn voxel_size(&self, dims: GridDims) -> f64 {
+        self.length / dims.ny as f64
+    }
+
+    /// The beam runs along y (clamped at y = 0, loaded at the last layer, deflecting in −z), so
+    /// it needs two layers and y must be its longest count: 12x12x40 would be a 12-voxel beam 40
+    /// voxels deep, almost surely a slip for the paper's 12x40x12.
+    fn check_dims(&self, dims: GridDims) -> Result<(), String> {
+        if dims.ny < 2 {
+            return Err(format!(
+                "a beam needs at least 2 layers along y, got {dims}"
+            ));
+        }
+        if dims.ny < dims.nx || dims.ny < dims.nz {
+            return Err(format!(
+                "a beam runs along y, so ny must be its longest count (did you mean [{}, {}, {}]?)",
+                dims.nx, dims.nz, dims.ny
+            ));
+        }
+        Ok(())
+    }
+
+    /// Only voxels face-connected to the clamped `y = 0` layer carry load.
+    fn keep(&self, grid: &VoxelGrid) -> VoxelGrid {
+        keep_connected_to_base(grid)
+    }
+
+    fn simulate(&self, design: &VoxelGrid) -> TaskOutcome<BeamMetrics> {
+        simulate_beam(design, self)
+    }
+
+    fn check_metrics(
+        &self,
+        fitness: f64,
+        metrics: &BeamMetrics,
+        dims: GridDims,
+    ) -> Result<(), String> {
+        report::check_metrics(self, fitness, metrics, dims)
+    }
+
+    fn headline(&self, m: &BeamMetrics) -> String {
+        format!("RMS {:.3} %", m.rms_percent)
+    }
+
+    fn figure(&self, m: &BeamMetrics) -> f64 {
+        m.rms_percent
+    }
+
+    fn meets_target(&self, m: &BeamMetrics, target: f64) -> bool {
+        m.rms_percent <= target
+    }
+
+    fn summary(&self, metrics: Option<&BeamMetrics>) -> serde_json::Value {
+        report::summary(self, metrics)
+    }
+
+    fn table(&self, metrics: Option<&BeamMetrics>, dims: GridDims) -> (String, Block) {
+        report::table(self, metrics, dims)
+    }
+
+    fn write_artefacts(
+        &self,
+        dir: &Path,
+        _genome: &Genome,
+        _dims: GridDims,
+        metrics: &BeamMetrics,
+    ) -> std::io::Result<Vec<Artefact>> {
+        report::write_profile(dir, metrics)
+    }
+
+    fn simulator_settings(&self, _dims: GridDims) -> Option<SimulatorSettings> {
+        None
+    }
+}

@@ -1,0 +1,51 @@
+//! The one error a scene's validation gives: which field, and what is wrong with it.
+
+/// A scene field that cannot be used, named by its path in the config (`dynamics.settle.max_time`).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {problem}")]
+pub struct SceneError {
+    pub field: String,
+    pub problem: String,
+}
+
+impl SceneError {
+    pub fn new(field: impl Into<String>, problem: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            problem: problem.into(),
+        }
+    }
+
+    /// The same error under an enclosing field: `settle.max_time` within `dynamics` becomes
+    /// `dynamics.settle.max_time`.
+    pub fn within(self, parent: &str) -> Self {
+        Self {
+            field: format!("{parent}.{}", self.field),
+            problem: self.problem,
+        }
+    }
+}
+
+/// Checks that `value` is finite and positive, naming `field` if not.
+pub fn positive(field: &str, value: f64) -> Result<(), SceneError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::new(
+            field,
+            format!("{value} must be a positive number"),
+        ))
+    }
+}
+
+/// Checks that `value` is finite, naming `field` if not.
+pub fn finite(field: &str, value: f64) -> Result<(), SceneError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::new(
+            field,
+            format!("{value} must be a finite number"),
+        ))
+    }
+}

@@ -1,0 +1,149 @@
+//! The walking-robot task (paper §IV): genome → voxels → the largest body settled on the floor and
+//! actuated → fitness = the centre of mass's steady travel along the heading.
+
+mod protocol;
+mod report;
+mod scene;
+
+use std::path::Path;
+
+pub use protocol::{
+    LocomotionFitness, LocomotionOutcome, LocomotionPhase, LocomotionProtocol, LocomotionStatus,
+    SettleRule, simulate_locomotion, simulate_locomotion_observed,
+};
+pub use report::PAPER_SPEED_PERCENT_PER_CYCLE;
+pub use scene::{LocomotionMetrics, LocomotionScene};
+
+use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use crate::export::Block;
+use crate::genome::{Genome, GenomeLimits};
+use crate::material::Palette;
+use crate::outcome::Failure;
+use crate::voxel::{GridDims, VoxelGrid, keep_largest_component};
+
+impl Task for LocomotionScene {
+    type Metrics = LocomotionMetrics;
+
+    const FIGURE: Figure = Figure {
+        column: "gait_mm",
+        axis: "DISPLACEMENT (MM)",
+        log: false,
+    };
+    const HAS_TARGET: bool = false;
+
+    fn validate(&self) -> Result<(), SceneError> {
+        LocomotionScene::validate(self)
+    }
+
+    fn palette(&self) -> &Palette {
+        &self.palette
+    }
+
+    fn limits(&self) -> &GenomeLimits {
+        &self.limits
+    }
+
+    fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// The robot's size is the workspace: the voxel size is that over the longest count.
+    fn voxel_size(&self, dims: GridDims) -> f64 {
+        self.dynamics_at(dims).voxel_size
+    }
+
+    fn check_dims(&self, _dims: GridDims) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// A robot is one body: its largest face-connected part.
+    fn keep(&self, grid: &VoxelGrid) -> VoxelGrid {
+        keep_largest_component(grid)
+    }
+
+    fn simulate(&self, body: &VoxelGrid) -> TaskOutcome<LocomotionMetrics> {
+        let dynamics = self.dynamics_at(body.dims());
+        let result = simulate_locomotion(body, &self.palette, &dynamics, &self.protocol());
+        match result.status {
+            LocomotionStatus::Completed => {
+                let metrics = LocomotionMetrics {
+                    displacement: result.displacement,
+                    gait_displacement: result.fitness,
+                    lateral: result.lateral,
+                    speed_percent_per_cycle: result.speed_percent_per_cycle,
+                    body_length: result.body_length,
+                    voxels: result.voxel_count,
+                    material_counts: body.material_counts(self.palette.len()),
+                    steps: result.steps,
+                    dt: result.dt,
+                    simulated_time: result.simulated_time,
+                    settle_time: result.settle_time,
+                    centre_of_mass_trace: result.centre_of_mass_trace,
+                };
+                TaskOutcome::evaluated(result.fitness, metrics)
+            }
+            LocomotionStatus::Empty => TaskOutcome::failed(Failure::Empty),
+            LocomotionStatus::Invalid { message } => {
+                TaskOutcome::failed(Failure::InvalidRequest(message))
+            }
+            LocomotionStatus::Diverged { reason, time } => TaskOutcome::failed(Failure::Diverged {
+                reason: reason.to_string(),
+                time,
+            }),
+        }
+    }
+
+    fn check_metrics(
+        &self,
+        fitness: f64,
+        metrics: &LocomotionMetrics,
+        dims: GridDims,
+    ) -> Result<(), String> {
+        report::check_metrics(self, fitness, metrics, dims)
+    }
+
+    fn headline(&self, m: &LocomotionMetrics) -> String {
+        format!(
+            "gait {:.2} mm ({:.2} % body length/cycle), travel {:.2} mm",
+            1e3 * m.gait_displacement,
+            m.speed_percent_per_cycle,
+            1e3 * m.displacement
+        )
+    }
+
+    fn figure(&self, m: &LocomotionMetrics) -> f64 {
+        1e3 * m.gait_displacement
+    }
+
+    fn meets_target(&self, _m: &LocomotionMetrics, _target: f64) -> bool {
+        false
+    }
+
+    fn summary(&self, metrics: Option<&LocomotionMetrics>) -> serde_json::Value {
+        report::summary(self, metrics)
+    }
+
+    fn table(&self, metrics: Option<&LocomotionMetrics>, dims: GridDims) -> (String, Block) {
+        report::table(self, metrics, dims)
+    }
+
+    /// The best robot walking (animation.gif), its centre of mass's path (trajectory.png, .csv),
+    /// from one more simulation of it.
+    fn write_artefacts(
+        &self,
+        dir: &Path,
+        genome: &Genome,
+        dims: GridDims,
+        _metrics: &LocomotionMetrics,
+    ) -> std::io::Result<Vec<Artefact>> {
+        report::write_pictures(self, dir, genome, dims)
+    }
+
+    fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
+        let scene = self.dynamics_at(dims);
+        let cycles = f64::from(self.actuation_cycles);
+        let stop_time =
+            self.settle.max_time + scene.actuation.as_ref().map_or(0.0, |a| a.period * cycles);
+        Some(SimulatorSettings { scene, stop_time })
+    }
+}

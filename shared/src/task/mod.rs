@@ -1,0 +1,325 @@
+//! Tasks: what a design is for. A task owns its scene (validated, naming the bad field), what it
+//! keeps of a voxelized genome, its evaluation protocol and fitness, its metrics and headline, its
+//! rows for summaries and reports (with the paper's figures where it has them), its pictures and
+//! its stop rule. The simulators (`statics`, `dynamics`) know nothing of fitness; the coordinator,
+//! worker, wire format and run store know nothing of any particular task: they meet tasks only
+//! through [`Scene`] and [`Metrics`], which the [`tasks!`] registration below generates.
+//!
+//! Adding a task: a folder here with a scene type implementing [`Task`], and one line in the
+//! registration (see ARCHITECTURE.md, "How to add a task").
+
+pub mod beam;
+pub mod cantilever;
+mod error;
+pub mod locomotion;
+pub mod stiffness;
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+pub use error::SceneError;
+
+use crate::dynamics::DynamicScene;
+use crate::export::Block;
+use crate::genome::{Genome, GenomeLimits};
+use crate::material::Palette;
+use crate::outcome::Failure;
+use crate::voxel::{GridDims, VoxelGrid, voxelize};
+
+/// The figure a task's progress is followed by (history, progress plots): its name as a CSV
+/// column, its axis label, and whether it is best read on a log axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Figure {
+    pub column: &'static str,
+    pub axis: &'static str,
+    pub log: bool,
+}
+
+/// One picture or file a task wrote for the report, relative to the results folder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Artefact {
+    pub path: String,
+    /// `Some` for a picture shown in the report, `None` for a data file that is only linked.
+    pub caption: Option<String>,
+}
+
+/// A dynamic task's simulation as another simulator should run it: the physics, and how long.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimulatorSettings {
+    pub scene: DynamicScene,
+    /// Settling plus every actuation cycle, s.
+    pub stop_time: f64,
+}
+
+/// A task: its scene is `Self`, its measurements `Self::Metrics`.
+pub trait Task {
+    type Metrics: Clone + std::fmt::Debug + PartialEq + Serialize + DeserializeOwned;
+
+    /// The figure history and progress plots follow.
+    const FIGURE: Figure;
+    /// Whether the task has a stop target (`budget.target_rms_percent`), see [`Task::meets_target`].
+    const HAS_TARGET: bool;
+
+    /// Checks every field, naming the first bad one.
+    fn validate(&self) -> Result<(), SceneError>;
+    /// Reads the files the scene names (a custom profile's CSV), relative to `base_dir`, the
+    /// config's folder; the scene keeps their contents, so workers never read files.
+    fn load_files(&mut self, _base_dir: &Path) -> Result<(), SceneError> {
+        Ok(())
+    }
+    /// The materials genome indices refer to.
+    fn palette(&self) -> &Palette;
+    /// Ranges and size limit a genome must respect.
+    fn limits(&self) -> &GenomeLimits;
+    /// Total-density threshold of the voxelization.
+    fn threshold(&self) -> f64;
+    /// Edge length of one voxel at resolution `dims`, m.
+    fn voxel_size(&self, dims: GridDims) -> f64;
+    /// Whether the task can be evaluated at `dims` (a reason if not).
+    fn check_dims(&self, dims: GridDims) -> Result<(), String>;
+    /// What the task keeps of a voxelized genome (the part it can use).
+    fn keep(&self, grid: &VoxelGrid) -> VoxelGrid;
+    /// Physics and fitness of a kept design. Every way a design can fail is an outcome.
+    fn simulate(&self, design: &VoxelGrid) -> TaskOutcome<Self::Metrics>;
+    /// Whether `fitness` and `metrics` claimed for a design at `dims` are ones this scene can
+    /// produce: every number finite and inside what the physics allows, every count within the
+    /// grid, the fitness the one the metrics give. Outcomes arrive from peers; this is how the
+    /// coordinator refuses an impossible one before anything (a plot, a report) consumes it.
+    fn check_metrics(
+        &self,
+        fitness: f64,
+        metrics: &Self::Metrics,
+        dims: GridDims,
+    ) -> Result<(), String>;
+    /// One line for progress and logs.
+    fn headline(&self, metrics: &Self::Metrics) -> String;
+    /// The value of [`Task::FIGURE`] for a design.
+    fn figure(&self, metrics: &Self::Metrics) -> f64;
+    /// The stop rule: whether `metrics` meet a `budget.target_rms_percent` target (never called
+    /// unless [`Task::HAS_TARGET`]; the config refuses the key otherwise).
+    fn meets_target(&self, metrics: &Self::Metrics, target: f64) -> bool;
+    /// The task's fields of `summary.json`.
+    fn summary(&self, metrics: Option<&Self::Metrics>) -> serde_json::Value;
+    /// The report's section on the best design: a heading and a table, with the paper's
+    /// reference figures beside ours where the paper has them.
+    fn table(&self, metrics: Option<&Self::Metrics>, dims: GridDims) -> (String, Block);
+    /// Task-specific pictures and data files of the best design, written into `dir`.
+    fn write_artefacts(
+        &self,
+        dir: &Path,
+        genome: &Genome,
+        dims: GridDims,
+        metrics: &Self::Metrics,
+    ) -> std::io::Result<Vec<Artefact>>;
+    /// How a dynamic simulator runs the design as this task means it (written into VXA
+    /// exports), or `None` for a static task.
+    fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings>;
+}
+
+/// An outcome with a task's own metrics.
+pub type TaskOutcome<M> = crate::outcome::Outcome<M>;
+
+/// The outcome every part of the system passes around: the registry's [`Metrics`].
+pub type Outcome = crate::outcome::Outcome<Metrics>;
+
+/// The voxels `genome` makes at `dims`, after `task` keeps what it can use.
+pub fn design<T: Task>(task: &T, genome: &Genome, dims: GridDims) -> VoxelGrid {
+    task.keep(&voxelize(
+        genome,
+        dims,
+        task.palette().len(),
+        task.threshold(),
+    ))
+}
+
+/// The whole evaluation of a task: validate the genome, check the resolution, voxelize, keep,
+/// simulate. Pure and deterministic.
+fn evaluate_task<T: Task>(task: &T, genome: &Genome, dims: GridDims) -> TaskOutcome<T::Metrics> {
+    if let Err(e) = genome.validate(task.limits(), task.palette().len()) {
+        return TaskOutcome::failed(Failure::InvalidGenome(e.to_string()));
+    }
+    if let Err(reason) = task.check_dims(dims) {
+        return TaskOutcome::failed(Failure::InvalidRequest(reason));
+    }
+    task.simulate(&design(task, genome, dims))
+}
+
+/// Registers the tasks: generates [`Scene`] (tagged by `kind` in configs and on the wire) and
+/// [`Metrics`] with one variant per task, and dispatches every [`Task`] method once, here.
+macro_rules! tasks {
+    ($($variant:ident = $kind:literal => $scene:ty),+ $(,)?) => {
+        /// A task's scene: everything an evaluation needs besides the genome and the resolution.
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        #[serde(tag = "kind")]
+        pub enum Scene {
+            $(#[serde(rename = $kind)] $variant($scene)),+
+        }
+
+        /// A task's measurements behind a fitness.
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum Metrics {
+            $(#[serde(rename = $kind)] $variant(<$scene as Task>::Metrics)),+
+        }
+
+        impl Scene {
+            /// The `kind` of this scene in configs.
+            pub fn kind(&self) -> &'static str {
+                match self {
+                    $(Scene::$variant(_) => $kind),+
+                }
+            }
+
+            pub fn validate(&self) -> Result<(), SceneError> {
+                match self { $(Scene::$variant(s) => s.validate()),+ }
+            }
+
+            /// Reads the files the scene names relative to `base_dir` (see [`Task::load_files`]).
+            pub fn load_files(&mut self, base_dir: &Path) -> Result<(), SceneError> {
+                match self { $(Scene::$variant(s) => s.load_files(base_dir)),+ }
+            }
+
+            pub fn palette(&self) -> &Palette {
+                match self { $(Scene::$variant(s) => s.palette()),+ }
+            }
+
+            pub fn limits(&self) -> &GenomeLimits {
+                match self { $(Scene::$variant(s) => s.limits()),+ }
+            }
+
+            pub fn threshold(&self) -> f64 {
+                match self { $(Scene::$variant(s) => s.threshold()),+ }
+            }
+
+            /// Edge length of one voxel at resolution `dims`, m.
+            pub fn voxel_size(&self, dims: GridDims) -> f64 {
+                match self { $(Scene::$variant(s) => s.voxel_size(dims)),+ }
+            }
+
+            pub fn check_dims(&self, dims: GridDims) -> Result<(), String> {
+                match self { $(Scene::$variant(s) => s.check_dims(dims)),+ }
+            }
+
+            /// The voxels a genome makes at `dims`, after the task keeps what it can use.
+            pub fn design(&self, genome: &Genome, dims: GridDims) -> VoxelGrid {
+                match self { $(Scene::$variant(s) => design(s, genome, dims)),+ }
+            }
+
+            /// Evaluates `genome` at resolution `dims`: pure and deterministic. A panic inside
+            /// (a bug of ours) becomes an `Internal` failure, so one design never brings a worker
+            /// or a run down.
+            pub fn evaluate(&self, genome: &Genome, dims: GridDims) -> Outcome {
+                catch_unwind(AssertUnwindSafe(|| match self {
+                    $(Scene::$variant(s) => evaluate_task(s, genome, dims).map(Metrics::$variant)),+
+                }))
+                .unwrap_or_else(|panic| {
+                    let message = panic
+                        .downcast_ref::<&str>()
+                        .map(|s| s.to_string())
+                        .or_else(|| panic.downcast_ref::<String>().cloned())
+                        .unwrap_or_else(|| "unknown panic".into());
+                    Outcome::failed(Failure::Internal(message))
+                })
+            }
+
+            /// The figure history and progress plots follow for this task.
+            pub fn figure_spec(&self) -> Figure {
+                match self { $(Scene::$variant(_) => <$scene as Task>::FIGURE),+ }
+            }
+
+            /// Whether `outcome` is one this scene can produce at `dims` (see
+            /// [`Task::check_metrics`]); a failure always is.
+            pub fn check_outcome(&self, outcome: &Outcome, dims: GridDims) -> Result<(), String> {
+                let Outcome::Evaluated { fitness, metrics } = outcome else { return Ok(()) };
+                if !fitness.is_finite() {
+                    return Err(format!("fitness {fitness} is not finite"));
+                }
+                match (self, metrics) {
+                    $((Scene::$variant(s), Metrics::$variant(m)) => s.check_metrics(*fitness, m, dims),)+
+                    #[allow(unreachable_patterns)]
+                    _ => Err(format!("metrics of another task for a {} scene", self.kind())),
+                }
+            }
+
+            /// The task's one-line headline of an outcome (`None` for a failure).
+            pub fn headline(&self, outcome: &Outcome) -> Option<String> {
+                match (self, outcome.metrics()?) {
+                    $((Scene::$variant(s), Metrics::$variant(m)) => Some(s.headline(m)),)+
+                    #[allow(unreachable_patterns)]
+                    _ => None,
+                }
+            }
+
+            /// The task's figure of an outcome (`None` for a failure).
+            pub fn figure(&self, outcome: &Outcome) -> Option<f64> {
+                match (self, outcome.metrics()?) {
+                    $((Scene::$variant(s), Metrics::$variant(m)) => Some(s.figure(m)),)+
+                    #[allow(unreachable_patterns)]
+                    _ => None,
+                }
+            }
+
+            /// Whether the task has a stop target (`budget.target_rms_percent`).
+            pub fn has_target(&self) -> bool {
+                match self { $(Scene::$variant(_) => <$scene as Task>::HAS_TARGET),+ }
+            }
+
+            /// The stop rule: whether `outcome` meets `target` (false for a failure).
+            pub fn meets_target(&self, outcome: &Outcome, target: f64) -> bool {
+                let Some(metrics) = outcome.metrics() else { return false };
+                match (self, metrics) {
+                    $((Scene::$variant(s), Metrics::$variant(m)) => s.meets_target(m, target),)+
+                    #[allow(unreachable_patterns)]
+                    _ => false,
+                }
+            }
+
+            /// The task's fields of `summary.json` for its best outcome.
+            pub fn summary(&self, best: &Outcome) -> serde_json::Value {
+                match self {
+                    $(Scene::$variant(s) => {
+                        let m = match best.metrics() { Some(Metrics::$variant(m)) => Some(m), _ => None };
+                        s.summary(m)
+                    }),+
+                }
+            }
+
+            /// The report's heading and table for the best outcome at `dims`.
+            pub fn table(&self, best: &Outcome, dims: GridDims) -> (String, Block) {
+                match self {
+                    $(Scene::$variant(s) => {
+                        let m = match best.metrics() { Some(Metrics::$variant(m)) => Some(m), _ => None };
+                        s.table(m, dims)
+                    }),+
+                }
+            }
+
+            /// The task's own pictures and data files of the best design (none for a failure).
+            pub fn write_artefacts(
+                &self,
+                dir: &Path,
+                genome: &Genome,
+                dims: GridDims,
+                best: &Outcome,
+            ) -> std::io::Result<Vec<Artefact>> {
+                match (self, best.metrics()) {
+                    $((Scene::$variant(s), Some(Metrics::$variant(m))) => s.write_artefacts(dir, genome, dims, m),)+
+                    _ => Ok(Vec::new()),
+                }
+            }
+
+            /// How a dynamic simulator runs a dynamic task's design at `dims` (for VXA exports).
+            pub fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
+                match self { $(Scene::$variant(s) => s.simulator_settings(dims)),+ }
+            }
+        }
+    };
+}
+
+tasks! {
+    Beam = "beam" => beam::BeamScene,
+    Locomotion = "locomotion" => locomotion::LocomotionScene,
+    Stiffness = "stiffness" => stiffness::StiffnessScene,
+}

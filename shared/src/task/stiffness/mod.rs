@@ -1,0 +1,120 @@
+//! The stiffness task: the stiffest cantilever for a budget of hard material (minimum compliance
+//! under the beam designer's clamp and tip load, with at most `max_hard_fraction` of the
+//! workspace hard, the rest soft or empty). This folder and one registration line in
+//! `task/mod.rs` are all of it: the proof that a task is one boundary.
+
+mod evaluate;
+mod report;
+mod scene;
+
+use std::path::Path;
+
+pub use evaluate::simulate_stiffness;
+pub use scene::{StiffnessMetrics, StiffnessScene};
+
+use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use crate::export::Block;
+use crate::genome::{Genome, GenomeLimits};
+use crate::material::Palette;
+use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
+
+impl Task for StiffnessScene {
+    type Metrics = StiffnessMetrics;
+
+    const FIGURE: Figure = Figure {
+        column: "relative_stiffness",
+        axis: "TIP STIFFNESS / ALL-HARD BEAM'S",
+        log: false,
+    };
+    const HAS_TARGET: bool = false;
+
+    fn validate(&self) -> Result<(), SceneError> {
+        StiffnessScene::validate(self)
+    }
+
+    fn palette(&self) -> &Palette {
+        &self.palette
+    }
+
+    fn limits(&self) -> &GenomeLimits {
+        &self.limits
+    }
+
+    fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    fn voxel_size(&self, dims: GridDims) -> f64 {
+        self.length / dims.ny as f64
+    }
+
+    /// The same cantilever as the beam designer's: along y, at least two layers.
+    fn check_dims(&self, dims: GridDims) -> Result<(), String> {
+        if dims.ny < 2 || dims.ny < dims.nx || dims.ny < dims.nz {
+            return Err(format!(
+                "a cantilever runs along y with at least 2 layers, so ny must be its longest count, got {dims}"
+            ));
+        }
+        Ok(())
+    }
+
+    fn keep(&self, grid: &VoxelGrid) -> VoxelGrid {
+        keep_connected_to_base(grid)
+    }
+
+    fn simulate(&self, design: &VoxelGrid) -> TaskOutcome<StiffnessMetrics> {
+        simulate_stiffness(design, self)
+    }
+
+    fn check_metrics(
+        &self,
+        fitness: f64,
+        metrics: &StiffnessMetrics,
+        dims: GridDims,
+    ) -> Result<(), String> {
+        report::check_metrics(self, fitness, metrics, dims)
+    }
+
+    fn headline(&self, m: &StiffnessMetrics) -> String {
+        format!(
+            "stiffness {:.4} of all-hard, {:.1} % hard{}",
+            m.relative_stiffness,
+            100.0 * m.hard_fraction,
+            if m.within_budget {
+                ""
+            } else {
+                " (over budget)"
+            }
+        )
+    }
+
+    fn figure(&self, m: &StiffnessMetrics) -> f64 {
+        m.relative_stiffness
+    }
+
+    fn meets_target(&self, _m: &StiffnessMetrics, _target: f64) -> bool {
+        false
+    }
+
+    fn summary(&self, metrics: Option<&StiffnessMetrics>) -> serde_json::Value {
+        report::summary(self, metrics)
+    }
+
+    fn table(&self, metrics: Option<&StiffnessMetrics>, dims: GridDims) -> (String, Block) {
+        report::table(self, metrics, dims)
+    }
+
+    fn write_artefacts(
+        &self,
+        _dir: &Path,
+        _genome: &Genome,
+        _dims: GridDims,
+        _metrics: &StiffnessMetrics,
+    ) -> std::io::Result<Vec<Artefact>> {
+        Ok(Vec::new())
+    }
+
+    fn simulator_settings(&self, _dims: GridDims) -> Option<SimulatorSettings> {
+        None
+    }
+}
