@@ -145,12 +145,20 @@ fn divergence_is_an_outcome_with_reason_and_time() {
     match &outcome.status {
         LocomotionStatus::Diverged { reason, time } => {
             assert!(time.is_finite() && *time > 0.0);
-            assert!(matches!(
-                reason,
-                DivergenceReason::Strain { .. }
-                    | DivergenceReason::Runaway { .. }
-                    | DivergenceReason::NonFinite
-            ));
+            // The reason carries the figure that crossed its limit: it must be over it (or the
+            // state non-finite), else the check fired on a healthy state.
+            let limits = &scene.divergence;
+            match reason {
+                DivergenceReason::Strain { strain, limit } => {
+                    assert_eq!(*limit, limits.max_strain);
+                    assert!(strain > limit, "{strain} <= {limit}");
+                }
+                DivergenceReason::Runaway { travel, limit } => {
+                    assert_eq!(*limit, limits.max_step_travel);
+                    assert!(travel > limit, "{travel} <= {limit}");
+                }
+                DivergenceReason::NonFinite => {}
+            }
         }
         other => panic!("expected divergence, got {other:?}"),
     }
@@ -169,4 +177,31 @@ fn empty_design_is_an_outcome() {
         &LocomotionProtocol::default(),
     );
     assert_eq!(outcome.status, LocomotionStatus::Empty);
+}
+
+#[test]
+fn a_diverged_simulation_stays_as_it_was_found() {
+    // After a divergence every further step returns the same divergence and leaves the state,
+    // time and step count alone, so a caller that keeps stepping learns nothing new and changes
+    // nothing.
+    let grid = VoxelGrid::filled(GridDims::new(3, 3, 3), MaterialId(1));
+    let scene = DynamicScene {
+        dt_fraction: 20.0,
+        ..DynamicScene::paper_locomotion()
+    };
+    let mut sim = Simulation::new(&grid, &foam_palette(), &scene).unwrap();
+    let first = loop {
+        if let Err(d) = sim.step() {
+            break d;
+        }
+        assert!(sim.steps() < 10_000, "did not diverge");
+    };
+    let (time, steps) = (sim.time(), sim.steps());
+    let positions = sim.positions().to_vec();
+    for _ in 0..5 {
+        assert_eq!(sim.step(), Err(first.clone()));
+    }
+    assert_eq!(sim.run_steps(100), Err(first.clone()));
+    assert_eq!((sim.time(), sim.steps()), (time, steps));
+    assert_eq!(sim.positions(), &positions[..]);
 }

@@ -85,6 +85,8 @@ pub struct Simulation {
     dt: f64,
     time: f64,
     steps: u64,
+    /// The divergence that stopped the simulation, if one did: later steps return it unchanged.
+    diverged: Option<Divergence>,
     actuation_time: Option<f64>,
 }
 
@@ -174,6 +176,7 @@ impl Simulation {
             dt,
             time: 0.0,
             steps: 0,
+            diverged: None,
             actuation_time: None,
         };
         sim.rebuild_passes();
@@ -320,6 +323,18 @@ impl Simulation {
     /// Advances one time step. On divergence the state is left as it was found diverged and
     /// every further call returns the same outcome.
     pub fn step(&mut self) -> std::result::Result<(), Divergence> {
+        if let Some(d) = &self.diverged {
+            return Err(d.clone());
+        }
+        let result = self.advance();
+        if let Err(d) = &result {
+            self.diverged = Some(d.clone());
+        }
+        result
+    }
+
+    /// One step of every pass, then the divergence checks.
+    fn advance(&mut self) -> std::result::Result<(), Divergence> {
         let link_step = LinkStep {
             voxel_size: self.scene.voxel_size,
             actuation_factor: self.actuation_factor(),
