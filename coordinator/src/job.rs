@@ -143,6 +143,8 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
             opts.exit_when_finished = true;
             // The coordinator waits only briefly for its own workers when it stops.
             opts.grace = Duration::from_secs(2);
+            // The local workers share this machine: each gets its part of the default budget.
+            opts.max_memory = Some(amorph_worker::memory::default_budget() / local.max(1) as u64);
             if let Some((cert, _)) = &settings.tls {
                 opts.ca_cert = Some(cert.clone());
                 opts.tls_domain = Some(settings.tls_domain.clone());

@@ -7,11 +7,11 @@
 use amorph::scene::Scene;
 use amorph::voxel::GridDims;
 
-/// Bytes per voxel of an evaluation at its peak, with a margin (docs/cluster.md, "Memory
-/// budget"): the static beam solver holds the stiffness matrix and its multigrid hierarchy, the
-/// dynamic simulator state per voxel and link.
-const BEAM_BYTES_PER_VOXEL: u64 = 4096;
-const LOCOMOTION_BYTES_PER_VOXEL: u64 = 2048;
+/// Bytes per voxel of an evaluation at its peak, measured (docs/cluster.md, "Memory budget": peak
+/// resident size of `worker evaluate` on solid designs) and rounded up: a beam's static solve
+/// held 11.2 kB per voxel from 12x48x12 to 32x96x32, a robot's simulation 0.53 kB.
+const BEAM_BYTES_PER_VOXEL: u64 = 16 << 10;
+const LOCOMOTION_BYTES_PER_VOXEL: u64 = 2 << 10;
 /// Memory an evaluation needs whatever its size (scene, genome, buffers).
 const BASE_BYTES: u64 = 16 << 20;
 /// The share of the machine's memory a worker uses when `--max-memory` is not given.

@@ -44,6 +44,8 @@ pub struct ClusterSection {
     pub worker_timeout_ms: u64,
     /// Different workers whose errors mark a task failed instead of retried.
     pub max_attempts: u32,
+    /// Longest a lease lives from its grant, heartbeats or not, ms.
+    pub max_lease_ms: u64,
 }
 
 impl Default for ClusterSection {
@@ -60,6 +62,7 @@ impl Default for ClusterSection {
             lease_ms: 10_000,
             worker_timeout_ms: 5000,
             max_attempts: 3,
+            max_lease_ms: 3_600_000,
         }
     }
 }
@@ -163,6 +166,7 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
                 "cluster.worker_timeout_ms must be longer than cluster.heartbeat_ms".into(),
             );
         }
+        let max_lease = millis("max_lease_ms", c.max_lease_ms, c.lease_ms)?;
         if !(1..=MAX_ATTEMPTS).contains(&c.max_attempts) {
             return Err(format!(
                 "cluster.max_attempts = {} must be between 1 and {MAX_ATTEMPTS}",
@@ -180,6 +184,7 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
                 heartbeat_interval,
                 worker_timeout,
                 max_attempts: c.max_attempts,
+                max_lease,
             },
         })
     }

@@ -48,6 +48,10 @@ pub struct QueueRules {
     pub worker_timeout: Duration,
     /// Different workers whose errors mark a task failed rather than retried.
     pub max_attempts: u32,
+    /// Longest a lease lives from its grant, heartbeats or not, so a worker that names its
+    /// leases in every heartbeat cannot keep them for ever. A lease that runs out goes to
+    /// another worker; the first holder's outcome still counts if it comes first.
+    pub max_lease: Duration,
 }
 
 impl Default for QueueRules {
@@ -57,6 +61,7 @@ impl Default for QueueRules {
             heartbeat_interval: Duration::from_secs(1),
             worker_timeout: Duration::from_secs(5),
             max_attempts: 3,
+            max_lease: Duration::from_secs(3600),
         }
     }
 }
@@ -228,7 +233,7 @@ impl TaskQueue {
             .collect();
         let granted: Vec<Arc<Task>> = chosen
             .into_iter()
-            .map(|id| s.grant(id, worker, now + self.rules.lease))
+            .map(|id| s.grant(id, worker, now, &self.rules))
             .collect();
         s.stats.dispatched += granted.len() as u64;
         Ok((granted, false))
@@ -320,7 +325,8 @@ impl TaskQueue {
                 Some(Phase::Leased {
                     worker: holder,
                     deadline,
-                }) if *holder == worker => *deadline = now + self.rules.lease,
+                    expires,
+                }) if *holder == worker => *deadline = (now + self.rules.lease).min(*expires),
                 _ => revoked.push(id),
             }
         }

@@ -18,7 +18,10 @@ pub(super) enum Phase {
     Queued,
     Leased {
         worker: WorkerId,
+        /// When the lease lapses unless its holder heartbeats.
         deadline: Instant,
+        /// When it lapses whatever the holder says (`QueueRules::max_lease` after the grant).
+        expires: Instant,
     },
     /// An outcome was accepted: final.
     Done,
@@ -63,12 +66,24 @@ impl TaskState {
 }
 
 impl State {
-    /// Queued → leased to `worker` until `deadline`.
-    pub(super) fn grant(&mut self, id: TaskId, worker: WorkerId, deadline: Instant) -> Arc<Task> {
+    /// Queued → leased to `worker` from `now`.
+    pub(super) fn grant(
+        &mut self,
+        id: TaskId,
+        worker: WorkerId,
+        now: Instant,
+        rules: &super::QueueRules,
+    ) -> Arc<Task> {
+        let expires = now + rules.max_lease;
+        let deadline = (now + rules.lease).min(expires);
         let t = self.tasks.get_mut(&id).expect("granted tasks exist");
         debug_assert_eq!(t.phase, Phase::Queued);
         self.queued.remove(&id);
-        t.phase = Phase::Leased { worker, deadline };
+        t.phase = Phase::Leased {
+            worker,
+            deadline,
+            expires,
+        };
         if !t.leased_to.contains(&worker) {
             t.leased_to.push(worker);
         }

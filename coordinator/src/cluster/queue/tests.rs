@@ -20,6 +20,7 @@ pub(super) fn rules() -> QueueRules {
         heartbeat_interval: Duration::from_secs(1),
         worker_timeout: Duration::from_secs(3),
         max_attempts: 3,
+        max_lease: Duration::from_secs(60),
     }
 }
 
@@ -298,4 +299,34 @@ fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
     q.finish();
     let (leased, finished) = q.lease(a, 4, t0).unwrap();
     assert!(leased.is_empty() && finished);
+}
+
+/// Issue 12, item 6: a worker that names its leases in every heartbeat kept them for ever (one
+/// held all 95 queued tasks, starving an honest worker). A lease now ends `max_lease` after its
+/// grant; a late outcome from the hoarder would still count if it came first.
+#[test]
+fn regression_heartbeats_cannot_keep_a_lease_past_its_lifetime() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let hoarder = q.register("hoarder", 2, t0);
+    let honest = q.register("honest", 2, t0);
+    q.submit(tasks(1..=2));
+    q.lease(hoarder, 2, t0).unwrap();
+    let mut now = t0;
+    while now < t0 + Duration::from_secs(59) {
+        now += Duration::from_secs(1);
+        assert!(q.heartbeat(hoarder, &[T1, T2], now).unwrap().0.is_empty());
+        q.heartbeat(honest, &[], now).unwrap();
+        q.reap(now);
+    }
+    assert!(
+        q.lease(honest, 2, now).unwrap().0.is_empty(),
+        "within its lifetime"
+    );
+    now += Duration::from_secs(1);
+    q.heartbeat(hoarder, &[T1, T2], now).unwrap();
+    q.heartbeat(honest, &[], now).unwrap();
+    q.reap(now);
+    assert_eq!(ids(&q.lease(honest, 2, now).unwrap().0), [1, 2]);
+    assert_eq!(q.heartbeat(hoarder, &[T1, T2], now).unwrap().0, [T1, T2]);
 }
