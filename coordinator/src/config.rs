@@ -7,6 +7,8 @@ use amorph::genome::MutationParams;
 use amorph::task::Scene;
 use serde::{Deserialize, Serialize};
 
+pub use crate::cluster::settings::ClusterSection;
+use crate::cluster::settings::ClusterSettings;
 use crate::search::{MigrationParams, ResolutionSchedule};
 
 #[derive(Debug, thiserror::Error)]
@@ -52,131 +54,6 @@ pub struct RawConfig {
 
 fn default_results_dir() -> PathBuf {
     PathBuf::from("results")
-}
-
-/// How the coordinator serves workers. Nothing here changes a run's result, so it may differ
-/// when a run is resumed.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ClusterSection {
-    /// Address workers connect to; port 0 picks a free one. 127.0.0.1 keeps the coordinator
-    /// private to this machine; use 0.0.0.0:PORT (with a token) for workers on other machines.
-    pub listen: String,
-    /// Workers started inside the coordinator process, talking to it over loopback gRPC like any
-    /// other worker. Unset: one per core. 0: only external `worker --connect` processes.
-    pub local_workers: Option<usize>,
-    /// Evaluation threads of each local worker.
-    pub local_worker_threads: usize,
-    /// File holding the shared secret workers must present (surrounding whitespace ignored). The
-    /// AMORPH_TOKEN environment variable, if set, takes precedence.
-    pub token_file: Option<PathBuf>,
-    /// PEM certificate chain and private key: serve TLS (workers connect with https://).
-    pub tls_cert: Option<PathBuf>,
-    pub tls_key: Option<PathBuf>,
-    /// Name in the certificate that local workers check (default "localhost").
-    pub tls_domain: Option<String>,
-    /// How often workers heartbeat, ms.
-    pub heartbeat_ms: u64,
-    /// How long a lease lasts without a heartbeat naming its task, ms.
-    pub lease_ms: u64,
-    /// A worker silent this long is dropped and its leases re-queued, ms.
-    pub worker_timeout_ms: u64,
-    /// Worker errors after which a task is marked failed instead of retried.
-    pub max_attempts: u32,
-}
-
-impl Default for ClusterSection {
-    fn default() -> Self {
-        Self {
-            listen: "127.0.0.1:0".into(),
-            local_workers: None,
-            local_worker_threads: 1,
-            token_file: None,
-            tls_cert: None,
-            tls_key: None,
-            tls_domain: None,
-            heartbeat_ms: 1000,
-            lease_ms: 10_000,
-            worker_timeout_ms: 5000,
-            max_attempts: 3,
-        }
-    }
-}
-
-impl ClusterSection {
-    /// Local workers to start: the configured count, or one per core.
-    pub fn local_worker_count(&self) -> usize {
-        self.local_workers
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-    }
-
-    pub fn queue_rules(&self) -> crate::cluster::QueueRules {
-        use std::time::Duration;
-        crate::cluster::QueueRules {
-            lease: Duration::from_millis(self.lease_ms),
-            heartbeat_interval: Duration::from_millis(self.heartbeat_ms),
-            worker_timeout: Duration::from_millis(self.worker_timeout_ms),
-            max_attempts: self.max_attempts,
-        }
-    }
-
-    /// The shared secret: AMORPH_TOKEN, else the token file, else none.
-    pub fn token(&self) -> std::result::Result<Option<String>, String> {
-        if let Ok(token) = std::env::var("AMORPH_TOKEN")
-            && !token.trim().is_empty()
-        {
-            return Ok(Some(token.trim().to_owned()));
-        }
-        match &self.token_file {
-            None => Ok(None),
-            Some(path) => {
-                let text = std::fs::read_to_string(path)
-                    .map_err(|e| format!("cluster.token_file {}: {e}", path.display()))?;
-                let token = text.trim();
-                if token.is_empty() {
-                    return Err(format!("cluster.token_file {} is empty", path.display()));
-                }
-                Ok(Some(token.to_owned()))
-            }
-        }
-    }
-
-    fn validate(&self) -> std::result::Result<(), String> {
-        if self.listen.parse::<std::net::SocketAddr>().is_err()
-            && !self
-                .listen
-                .rsplit_once(':')
-                .is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok())
-        {
-            return Err(format!(
-                "cluster.listen = {:?} is not HOST:PORT",
-                self.listen
-            ));
-        }
-        if self.local_worker_threads == 0 {
-            return Err("cluster.local_worker_threads must be at least 1".into());
-        }
-        if self.tls_cert.is_some() != self.tls_key.is_some() {
-            return Err(
-                "cluster.tls_cert and cluster.tls_key go together: set both or neither".into(),
-            );
-        }
-        if self.heartbeat_ms < 10 {
-            return Err("cluster.heartbeat_ms must be at least 10".into());
-        }
-        if self.lease_ms <= self.heartbeat_ms {
-            return Err("cluster.lease_ms must be longer than cluster.heartbeat_ms".into());
-        }
-        if self.worker_timeout_ms <= self.heartbeat_ms {
-            return Err(
-                "cluster.worker_timeout_ms must be longer than cluster.heartbeat_ms".into(),
-            );
-        }
-        if self.max_attempts == 0 {
-            return Err("cluster.max_attempts must be at least 1".into());
-        }
-        Ok(())
-    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -276,19 +153,48 @@ impl RunConfig {
     }
 }
 
+/// Most individuals over all islands, and most islands: a million genomes of the paper's size
+/// hold a few GB, and every bound keeps size arithmetic far from overflow.
+const MAX_INDIVIDUALS: usize = 1 << 20;
+const MAX_ISLANDS: usize = 4096;
+
 fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     let s = &raw.search;
     if raw.name.is_empty() || raw.name.contains(['/', '\\']) || raw.name.starts_with('.') {
         return Err(format!("name = {:?} must be a plain folder name", raw.name));
     }
-    if s.population < 2 {
-        return Err("search.population must be at least 2".into());
+    if !(2..=MAX_INDIVIDUALS).contains(&s.population) {
+        return Err(format!(
+            "search.population = {} must be between 2 and {MAX_INDIVIDUALS}",
+            s.population
+        ));
     }
-    if s.islands == 0 {
-        return Err("search.islands must be at least 1".into());
+    if !(1..=MAX_ISLANDS).contains(&s.islands) {
+        return Err(format!(
+            "search.islands = {} must be between 1 and {MAX_ISLANDS}",
+            s.islands
+        ));
     }
-    if s.children_per_epoch == 0 {
-        return Err("search.children_per_epoch must be at least 1".into());
+    if !(1..=MAX_INDIVIDUALS).contains(&s.children_per_epoch) {
+        return Err(format!(
+            "search.children_per_epoch = {} must be between 1 and {MAX_INDIVIDUALS}",
+            s.children_per_epoch
+        ));
+    }
+    // Both bounded above, so the product is at most 2^32: no overflow.
+    if s.islands * s.population > MAX_INDIVIDUALS {
+        return Err(format!(
+            "search.islands x search.population = {} x {} = {} individuals, at most {MAX_INDIVIDUALS}",
+            s.islands,
+            s.population,
+            s.islands * s.population
+        ));
+    }
+    if s.islands * s.children_per_epoch > MAX_INDIVIDUALS {
+        return Err(format!(
+            "search.islands x search.children_per_epoch = {} children per epoch, at most {MAX_INDIVIDUALS}",
+            s.islands * s.children_per_epoch
+        ));
     }
     let limits = raw.scene.limits();
     if s.initial_points == 0 || s.initial_points > limits.max_points {
@@ -336,7 +242,7 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
             raw.scene.kind()
         ));
     }
-    raw.cluster.validate()?;
+    ClusterSettings::try_from(&raw.cluster)?;
     raw.resolution.validate()?;
     raw.scene.validate().map_err(|e| format!("scene.{e}"))?;
     for (i, &[nx, ny, nz]) in raw.resolution.levels.iter().enumerate() {
@@ -398,5 +304,65 @@ target = "straight"
             .unwrap_err()
             .to_string();
         assert!(err.contains("wavy"), "{err}");
+    }
+
+    /// Issue 12, item 4: sizes that overflowed passed validation, then panicked or aborted.
+    #[test]
+    fn regression_config_sizes_that_overflow_name_their_key() {
+        let cases = [
+            (
+                "levels = [[6, 20, 6]]",
+                "levels = [[1, 4294967296, 4294967296]]",
+                "resolution.levels[0]",
+            ),
+            (
+                "levels = [[6, 20, 6]]",
+                "levels = [[2097152, 4194304, 2097152]]",
+                "resolution.levels[0]",
+            ),
+            (
+                "[budget]",
+                "[search]\npopulation = 4611686018427387904\nislands = 4\n[budget]",
+                "search.population",
+            ),
+            (
+                "[budget]",
+                "[search]\npopulation = 1099511627776\n[budget]",
+                "search.population",
+            ),
+            (
+                "[budget]",
+                "[search]\npopulation = 1000\nislands = 4096\n[budget]",
+                "search.islands x search.population",
+            ),
+            (
+                "[budget]",
+                "[search]\nislands = 100000\n[budget]",
+                "search.islands",
+            ),
+            (
+                "[budget]",
+                "[search]\nchildren_per_epoch = 4611686018427387904\n[budget]",
+                "search.children_per_epoch",
+            ),
+            (
+                "[budget]",
+                "[cluster]\nlocal_workers = 100000\n[budget]",
+                "cluster.local_workers",
+            ),
+            (
+                "[budget]",
+                "[cluster]\nlease_ms = 18446744073709551615\n[budget]",
+                "cluster.lease_ms",
+            ),
+        ];
+        for (from, to, key) in cases {
+            let text = MINIMAL.replace(from, to);
+            let err = RunConfig::parse(&text, Path::new("t.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(key), "{to}: {err}");
+            assert!(!err.contains('\n'), "{err}");
+        }
     }
 }

@@ -21,3 +21,75 @@ impl std::fmt::Display for TaskId {
         write!(f, "task-{}", self.0)
     }
 }
+
+/// A worker's registration with one coordinator process: a serial number and the process's tag,
+/// so an id handed out before a restart (or made up) is told apart from a live one. On the wire
+/// it is the text `w<serial>-<tag as 6 hex digits>`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct WorkerId {
+    pub serial: u64,
+    pub tag: u32,
+}
+
+impl std::fmt::Display for WorkerId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "w{}-{:06x}", self.serial, self.tag)
+    }
+}
+
+impl std::str::FromStr for WorkerId {
+    type Err = ();
+
+    /// Strict: exactly the form `Display` writes, so one worker has one spelling.
+    fn from_str(text: &str) -> Result<Self, ()> {
+        let (serial, tag) = text
+            .strip_prefix('w')
+            .ok_or(())?
+            .split_once('-')
+            .ok_or(())?;
+        let digits = |s: &str, radix: u32| {
+            !s.is_empty()
+                && s.chars()
+                    .all(|c| c.is_digit(radix) && !c.is_ascii_uppercase())
+                && !(s.len() > 1 && radix == 10 && s.starts_with('0'))
+        };
+        if !digits(serial, 10) || tag.len() != 6 || !digits(tag, 16) {
+            return Err(());
+        }
+        Ok(Self {
+            serial: serial.parse().map_err(|_| ())?,
+            tag: u32::from_str_radix(tag, 16).map_err(|_| ())?,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn worker_ids_round_trip_and_parse_strictly() {
+        let id = WorkerId {
+            serial: 42,
+            tag: 0x00ab12,
+        };
+        assert_eq!(id.to_string(), "w42-00ab12");
+        assert_eq!("w42-00ab12".parse(), Ok(id));
+        for bad in [
+            "",
+            "w",
+            "w42",
+            "w42-",
+            "42-00ab12",
+            "w042-00ab12",
+            "w42-ab12",
+            "w42-00AB12",
+            "w42-00ab12x",
+            "w-00ab12",
+            "w+4-00ab12",
+            "w99999999999999999999-000000",
+        ] {
+            assert_eq!(bad.parse::<WorkerId>(), Err(()), "{bad}");
+        }
+    }
+}

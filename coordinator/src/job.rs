@@ -11,7 +11,7 @@ use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
 use tokio::sync::watch;
 use tracing::{info, warn};
 
-use crate::cluster::{self, ClusterEvaluator, ServerOptions, TaskQueue};
+use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue};
 use crate::config::RunConfig;
 use crate::progress::Progress;
 use crate::run::{RunContext, RunError, run};
@@ -78,18 +78,22 @@ pub enum JobError {
 /// Runs a config on the cluster: the coordinator's gRPC server, `local_workers` in-process workers
 /// and any `worker --connect` processes that join.
 pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, JobError> {
-    let cluster_config = &config.raw.cluster;
+    let config_error = |message: String| JobError::Config {
+        path: config.source.display().to_string(),
+        message,
+    };
+    // Command-line overrides are checked by the same bounds as the config's keys.
+    let mut section = config.raw.cluster.clone();
+    if let Some(listen) = &options.listen {
+        section.listen = listen.clone();
+    }
+    if let Some(n) = options.local_workers {
+        section.local_workers = Some(n);
+    }
+    let settings = ClusterSettings::try_from(&section).map_err(config_error)?;
     let token = match options.token.clone() {
         Some(t) => Some(t),
-        None => cluster_config.token().map_err(|message| JobError::Config {
-            path: config.source.display().to_string(),
-            message,
-        })?,
-    };
-    let store = match options.store {
-        StoreMode::New => RunStore::create(config, false)?,
-        StoreMode::Fresh => RunStore::create(config, true)?,
-        StoreMode::Resume => RunStore::resume(config)?,
+        None => section.token().map_err(config_error)?,
     };
     // The network side needs little CPU: two runtime threads leave the cores to the evaluations.
     let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -99,49 +103,52 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
         .build()
         .map_err(JobError::Runtime)?;
 
-    let queue = Arc::new(TaskQueue::new(cluster_config.queue_rules()));
+    // Listen before touching the run store, so a port in use leaves no store behind to demand
+    // --resume or --fresh on the retry.
+    let queue = Arc::new(TaskQueue::new(settings.rules.clone()));
     let server_options = ServerOptions {
-        listen: options
-            .listen
-            .clone()
-            .unwrap_or_else(|| cluster_config.listen.clone()),
+        listen: settings.listen.clone(),
         token: token.clone(),
-        tls: cluster_config
-            .tls_cert
-            .clone()
-            .zip(cluster_config.tls_key.clone()),
+        tls: settings.tls.clone(),
     };
     let server = runtime.block_on(cluster::start(
         &server_options,
         queue.clone(),
         &config.raw.scene,
     ))?;
+    let store = match options.store {
+        StoreMode::New => RunStore::create(config, false),
+        StoreMode::Fresh => RunStore::create(config, true),
+        StoreMode::Resume => RunStore::resume(config),
+    };
+    let store = match store {
+        Ok(store) => store,
+        Err(e) => {
+            runtime.block_on(server.shutdown());
+            return Err(e.into());
+        }
+    };
     let url = server.url(server_options.tls.is_some());
     if let Some(tx) = &options.on_listening {
         let _ = tx.send(server.addr);
     }
 
     let (stop_workers, stop_rx) = watch::channel(false);
-    let local = options
-        .local_workers
-        .unwrap_or_else(|| cluster_config.local_worker_count());
+    let local = settings.local_workers;
     let workers: Vec<_> = (0..local)
         .map(|i| {
-            let mut opts = WorkerOptions::new(url.clone(), cluster_config.local_worker_threads);
+            let mut opts = WorkerOptions::new(url.clone(), settings.local_worker_threads);
             opts.name = format!("local-{i}");
             opts.token = token.clone();
             opts.mode = EvaluationMode::Physics;
             opts.exit_when_finished = true;
             // The coordinator waits only briefly for its own workers when it stops.
             opts.grace = Duration::from_secs(2);
-            if server_options.tls.is_some() {
-                opts.ca_cert = cluster_config.tls_cert.clone();
-                opts.tls_domain = Some(
-                    cluster_config
-                        .tls_domain
-                        .clone()
-                        .unwrap_or_else(|| "localhost".into()),
-                );
+            // The local workers share this machine: each gets its part of the default budget.
+            opts.max_memory = Some(amorph_worker::memory::default_budget() / local.max(1) as u64);
+            if let Some((cert, _)) = &settings.tls {
+                opts.ca_cert = Some(cert.clone());
+                opts.tls_domain = Some(settings.tls_domain.clone());
             }
             runtime.spawn(run_worker(opts, stop_rx.clone()))
         })

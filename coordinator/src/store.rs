@@ -325,12 +325,16 @@ impl RunStore {
         })?;
         rows.into_iter()
             .map(|(id, genome_json, resolution, outcome)| {
+                let id = u64::try_from(id).map_err(|_| StoreError::Corrupt {
+                    path: self.path.clone(),
+                    message: format!("table evaluation, row task_id {id}: negative task id"),
+                })?;
                 let outcome = serde_json::from_str(&outcome).map_err(|e| StoreError::Corrupt {
                     path: self.path.clone(),
                     message: format!("evaluation of task {id}: {e}"),
                 })?;
                 Ok((
-                    id as u64,
+                    id,
                     StoredEvaluation {
                         genome_json,
                         resolution,
@@ -359,7 +363,15 @@ impl RunStore {
                 r.get::<_, Option<i64>>(0)
             })
         })
-        .map(|e| e.map(|e| e as usize))
+        .and_then(|e| {
+            e.map(|e| {
+                usize::try_from(e).map_err(|_| StoreError::Corrupt {
+                    path: self.path.clone(),
+                    message: format!("table epoch, row epoch {e}: negative epoch"),
+                })
+            })
+            .transpose()
+        })
     }
 
     /// The population of every island after `epoch`, as task ids in slot order.
@@ -374,12 +386,24 @@ impl RunStore {
             Ok(rows)
         })?;
         let mut islands: Vec<Vec<u64>> = Vec::new();
-        for (island, _, task) in rows {
-            let island = island as usize;
-            if islands.len() <= island {
-                islands.resize(island + 1, Vec::new());
+        for (island, slot, task) in rows {
+            // A store is a file anyone may have edited: a row that cannot be a population entry
+            // is an error naming it, never an index out of range or a huge allocation.
+            let corrupt = |what: &str| StoreError::Corrupt {
+                path: self.path.clone(),
+                message: format!(
+                    "table population, row (epoch {epoch}, island {island}, slot {slot}, task_id {task}): {what}"
+                ),
+            };
+            let i = usize::try_from(island)
+                .ok()
+                .filter(|&i| i <= islands.len())
+                .ok_or_else(|| corrupt("island out of order or out of range"))?;
+            let task = u64::try_from(task).map_err(|_| corrupt("negative task id"))?;
+            if i == islands.len() {
+                islands.push(Vec::new());
             }
-            islands[island].push(task as u64);
+            islands[i].push(task);
         }
         Ok(islands)
     }
@@ -548,6 +572,46 @@ mod tests {
             Err(StoreError::ConfigChanged { differs, .. }) => assert_eq!(differs, "seed"),
             other => panic!("a changed seed must not resume: {:?}", other.map(|_| ())),
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Issue 12, item 8: a store edited to hold a negative island panicked; a corrupt row is an
+    /// error naming the table and the row.
+    #[test]
+    fn regression_a_corrupt_population_row_is_an_error_naming_it() {
+        let dir = std::env::temp_dir().join(format!("amorph-store-corrupt-{}", std::process::id()));
+        let store = RunStore::create(&locomotion_config(&dir, 1), true).unwrap();
+        let insert = |island: i64, task: i64| {
+            store
+                .with(|c| {
+                    c.execute(
+                        "INSERT INTO population(epoch, island, slot, task_id, fitness) VALUES (0, ?1, 0, ?2, 0.0)",
+                        [island, task],
+                    )
+                })
+                .unwrap();
+        };
+        insert(0, 1);
+        assert_eq!(store.population(0).unwrap(), [[1]]);
+        for (island, task) in [(-1, 2), (1 << 40, 3), (1, -4)] {
+            insert(island, task);
+            let err = store.population(0).unwrap_err().to_string();
+            assert!(err.contains("table population, row (epoch 0"), "{err}");
+            assert!(err.contains(&format!("task_id {task}")), "{err}");
+            store
+                .with(|c| c.execute("DELETE FROM population WHERE task_id = ?1", [task]))
+                .unwrap();
+        }
+        store
+            .with(|c| {
+                c.execute(
+                    "INSERT INTO evaluation(task_id, epoch, island, purpose, resolution, genome, outcome, fitness, worker, wall_seconds, finished_unix) VALUES (-7, 0, 0, 'child', '', '{}', '{}', 0.0, '', 0.0, 0)",
+                    [],
+                )
+            })
+            .unwrap();
+        let err = store.evaluations().unwrap_err().to_string();
+        assert!(err.contains("table evaluation, row task_id -7"), "{err}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -14,10 +14,6 @@ use crate::v1;
 /// Most Gaussian points a genome may carry on the wire, whatever the scene allows; a scene's own
 /// (smaller) limit is enforced by the evaluation, which returns an invalid-genome outcome.
 pub const MAX_GENOME_POINTS: usize = 65_536;
-/// Largest voxel count along one axis, and in all, a task may ask for. 8 Mi voxels is ten times
-/// the largest grid the benchmarks use (64x200x64); more would let one request exhaust a worker.
-pub const MAX_AXIS_VOXELS: u32 = 1024;
-pub const MAX_VOXELS: u64 = 8 << 20;
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum WireError {
@@ -30,6 +26,11 @@ pub enum WireError {
         field: String,
         value: String,
         range: &'static str,
+    },
+    #[error("{field}: {source}")]
+    Grid {
+        field: &'static str,
+        source: crate::grid::GridSizeError,
     },
     #[error("{field}: {message}")]
     Malformed {
@@ -127,29 +128,15 @@ pub fn dims_to_wire(dims: GridDims) -> v1::Resolution {
     }
 }
 
-/// A resolution within [`MAX_AXIS_VOXELS`] per axis and [`MAX_VOXELS`] in all.
+/// A resolution within the grid limits (`crate::grid`).
 pub fn dims_from_wire(resolution: Option<&v1::Resolution>) -> Result<GridDims> {
     let r = resolution.ok_or(WireError::Missing {
         field: "task.resolution",
     })?;
-    for (name, n) in [("nx", r.nx), ("ny", r.ny), ("nz", r.nz)] {
-        if n == 0 || n > MAX_AXIS_VOXELS {
-            return Err(WireError::OutOfRange {
-                field: format!("task.resolution.{name}"),
-                value: n.to_string(),
-                range: "1..=1024",
-            });
-        }
-    }
-    let total = u64::from(r.nx) * u64::from(r.ny) * u64::from(r.nz);
-    if total > MAX_VOXELS {
-        return Err(WireError::OutOfRange {
-            field: "task.resolution".into(),
-            value: format!("{}x{}x{} = {total} voxels", r.nx, r.ny, r.nz),
-            range: "at most 8388608 voxels",
-        });
-    }
-    Ok(GridDims::new(r.nx as usize, r.ny as usize, r.nz as usize))
+    crate::grid::checked_grid([r.nx, r.ny, r.nz].map(u64::from)).map_err(|source| WireError::Grid {
+        field: "task.resolution",
+        source,
+    })
 }
 
 pub fn outcome_to_wire(outcome: &Outcome) -> v1::Outcome {
@@ -317,7 +304,7 @@ mod tests {
         let big = v1::Resolution {
             nx: 1024,
             ny: 1024,
-            nz: 9,
+            nz: 2,
         };
         let err = dims_from_wire(Some(&big)).unwrap_err().to_string();
         assert!(err.contains("task.resolution"), "{err}");

@@ -2,6 +2,7 @@
 //! conversions to the domain types of the shared library.
 
 pub mod convert;
+pub mod grid;
 
 #[allow(missing_debug_implementations, clippy::all)]
 pub mod v1 {
@@ -9,7 +10,8 @@ pub mod v1 {
 }
 
 /// The version both sides must speak; bump it with any incompatible change to the `.proto`.
-pub const PROTOCOL_VERSION: u32 = 1;
+/// Version 2: heartbeats carry the version too.
+pub const PROTOCOL_VERSION: u32 = 2;
 
 /// Largest message either side decodes or encodes. A genome at the paper's scale is a few kB and a
 /// locomotion outcome's metrics a few tens of kB; 16 MiB leaves room for genomes of many thousands

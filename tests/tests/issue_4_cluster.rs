@@ -144,9 +144,37 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
                 wall_seconds: 0.0,
             }],
         };
-        let empty = convert::outcome_to_wire(&amorph::outcome::Outcome::failed(
+        let empty = convert::outcome_to_wire(&amorph::task::Outcome::failed(
             amorph::outcome::Failure::Empty,
         ));
+
+        // A probe's lease (long-polling until the first batch is queued) makes sure task 1
+        // exists before it is reported: without it the report raced the first submit and could
+        // get NOT_FOUND instead of FAILED_PRECONDITION.
+        let probe = c
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: 1,
+                name: "probe".into(),
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .worker_id;
+        let mut probed = Vec::new();
+        while probed.is_empty() {
+            probed = c
+                .lease(v1::LeaseRequest {
+                    worker_id: probe.clone(),
+                    max_tasks: 1,
+                    wait_ms: 1000,
+                })
+                .await
+                .unwrap()
+                .into_inner()
+                .tasks;
+        }
+        assert_eq!(probed[0].task_id, 1);
 
         // Unknown task id; a task that exists but was never leased to us; an unknown worker.
         let s = c
@@ -169,6 +197,7 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
             .heartbeat(v1::HeartbeatRequest {
                 worker_id: "w1-forged".into(),
                 active_task_ids: vec![],
+                protocol_version: PROTOCOL_VERSION,
             })
             .await
             .unwrap_err();

@@ -53,7 +53,13 @@ pub struct WorkerOptions {
     pub exit_when_finished: bool,
     /// On a stop signal, how long to let running evaluations finish before handing them back.
     pub grace: Duration,
+    /// Bytes all evaluations at once may use (None: half the machine's memory); a task whose
+    /// estimate exceeds its share (this divided by `threads`) is refused, not started.
+    pub max_memory: Option<u64>,
 }
+
+/// Most evaluation threads a worker may run (the coordinator's largest capacity).
+pub const MAX_THREADS: usize = 1024;
 
 impl WorkerOptions {
     pub fn new(url: impl Into<String>, threads: usize) -> Self {
@@ -69,6 +75,7 @@ impl WorkerOptions {
             give_up_after: None,
             exit_when_finished: true,
             grace: Duration::from_secs(30),
+            max_memory: None,
         }
     }
 }
@@ -140,6 +147,8 @@ struct Worker {
     endpoint: Endpoint,
     auth: Auth,
     pool: Pool,
+    /// Bytes one evaluation may use.
+    evaluation_budget: u64,
     done: mpsc::UnboundedReceiver<JobDone>,
     /// Tasks on the pool, with the worker id they were leased under.
     active: HashMap<u64, String>,
@@ -185,9 +194,22 @@ pub async fn run_worker(
             })
             .transpose()?,
     );
+    if opts.threads > MAX_THREADS {
+        return Err(ClientError::Setup(format!(
+            "--threads {}: at most {MAX_THREADS}",
+            opts.threads
+        )));
+    }
     let (done_tx, done) = mpsc::unbounded_channel();
+    let pool = Pool::new(opts.threads, opts.mode, done_tx).map_err(|e| {
+        ClientError::Setup(format!("starting {} evaluation threads: {e}", opts.threads))
+    })?;
     let mut worker = Worker {
-        pool: Pool::new(opts.threads, opts.mode, done_tx),
+        evaluation_budget: opts
+            .max_memory
+            .unwrap_or_else(crate::memory::default_budget)
+            / opts.threads as u64,
+        pool,
         opts,
         endpoint,
         auth,
@@ -402,6 +424,7 @@ impl Worker {
                         .heartbeat(v1::HeartbeatRequest {
                             worker_id: id.clone(),
                             active_task_ids: self.leased_under(&id),
+                            protocol_version: PROTOCOL_VERSION,
                         })
                         .await
                         .map_err(|s| self.call_failed("heartbeat", s))?
@@ -480,7 +503,11 @@ impl Worker {
                     .map(|dims| (genome, dims))
                     .map_err(|e| e.to_string())
             })
-            .and_then(|(genome, dims)| scene.map(|scene| (genome, dims, scene)));
+            .and_then(|(genome, dims)| scene.map(|scene| (genome, dims, scene)))
+            .and_then(|(genome, dims, scene)| {
+                crate::memory::check(&scene, dims, self.evaluation_budget)
+                    .map(|()| (genome, dims, scene))
+            });
         match converted {
             Ok((genome, dims, scene)) => {
                 self.active.insert(task_id, id.to_owned());

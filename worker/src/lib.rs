@@ -3,6 +3,7 @@
 //! and `worker export` do the same evaluation offline for a saved genome.
 
 pub mod client;
+pub mod memory;
 pub mod pool;
 
 pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
@@ -44,28 +45,54 @@ pub enum WorkerError {
     Parse { path: String, message: String },
     #[error("resolution '{0}' is not of the form NXxNYxNZ with positive counts")]
     Resolution(String),
+    #[error("resolution '{0}': {1}")]
+    ResolutionLimit(String, amorph_proto::grid::GridSizeError),
 }
 
 pub type Result<T> = std::result::Result<T, WorkerError>;
 
-/// A genome file: either a bare genome or any results file holding one under `genome`
-/// (`best_genome.json`, `island-<i>-best.json`).
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum GenomeFile {
-    Bare(Genome),
-    Wrapped { genome: Genome },
-}
-
+/// A genome file: either a bare genome (`{"points": [...]}`) or any results file holding one
+/// under `genome` (`best_genome.json`, `island-<i>-best.json`). Errors name the field
+/// (`genome.points[3].material`), not just a position in the text.
 pub fn read_genome(path: &Path) -> Result<Genome> {
     let text = read(path)?;
-    let file: GenomeFile = serde_json::from_str(&text).map_err(|e| WorkerError::Parse {
+    let parse_error = |message: String| WorkerError::Parse {
         path: path.display().to_string(),
-        message: e.to_string(),
+        message,
+    };
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        // JSON has no NaN or Infinity; serde_json only says "expected value" where one stands.
+        let hint = if ["NaN", "Infinity"].iter().any(|w| text.contains(w)) {
+            " (JSON has no NaN or Infinity: every number must be finite)"
+        } else {
+            ""
+        };
+        parse_error(format!("{e}{hint}"))
     })?;
-    Ok(match file {
-        GenomeFile::Bare(g) | GenomeFile::Wrapped { genome: g } => g,
-    })
+    let (genome, prefix) = match value.get("genome") {
+        Some(g) => (g, "genome"),
+        None => (&value, "the genome"),
+    };
+    let points = genome
+        .get("points")
+        .and_then(serde_json::Value::as_array)
+        .ok_or_else(|| parse_error(format!("{prefix}.points is missing or not a list")))?;
+    for (i, point) in points.iter().enumerate() {
+        for field in ["position", "density", "falloff", "material"] {
+            let Some(v) = point.get(field) else {
+                return Err(parse_error(format!(
+                    "{prefix}.points[{i}].{field} is missing"
+                )));
+            };
+            let checked = match field {
+                "position" => <[f64; 3]>::deserialize(v).map(|_| ()),
+                "material" => amorph::material::MaterialId::deserialize(v).map(|_| ()),
+                _ => f64::deserialize(v).map(|_| ()),
+            };
+            checked.map_err(|e| parse_error(format!("{prefix}.points[{i}].{field} = {v}: {e}")))?;
+        }
+    }
+    Genome::deserialize(genome).map_err(|e| parse_error(format!("{prefix}: {e}")))
 }
 
 /// A scene from a TOML file: a run config (its `[scene]` table is used) or a bare scene table.
@@ -101,15 +128,16 @@ pub fn read_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Parses `12x12x40`.
+/// Parses `12x12x40`, within the grid limits every task obeys (`amorph_proto::grid`).
 pub fn parse_resolution(text: &str) -> Result<GridDims> {
-    let counts: Vec<usize> = text
+    let counts: Vec<u64> = text
         .split('x')
-        .map(|p| p.trim().parse().ok().filter(|&n| n > 0))
+        .map(|p| p.trim().parse().ok())
         .collect::<Option<_>>()
         .ok_or_else(|| WorkerError::Resolution(text.to_owned()))?;
     match counts[..] {
-        [nx, ny, nz] => Ok(GridDims::new(nx, ny, nz)),
+        [nx, ny, nz] => amorph_proto::grid::checked_grid([nx, ny, nz])
+            .map_err(|e| WorkerError::ResolutionLimit(text.to_owned(), e)),
         _ => Err(WorkerError::Resolution(text.to_owned())),
     }
 }
@@ -125,13 +153,76 @@ fn read(path: &Path) -> Result<String> {
 mod tests {
     use super::*;
 
+    /// Issue 12, item 8: `material: 300` gave "data did not match any variant of untagged enum
+    /// GenomeFile", and a NaN "expected value at line 1 column 27"; neither named the field.
+    #[test]
+    fn regression_a_bad_genome_file_names_the_field() {
+        let dir = std::env::temp_dir().join(format!("amorph-genome-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let point =
+            r#"{"position": [0.5, 0.5, 0.5], "density": 1.0, "falloff": 0.1, "material": 1}"#;
+        let cases = [
+            (format!(r#"{{"points": [{point}]}}"#), None),
+            (
+                format!(r#"{{"fitness": 1.0, "genome": {{"points": [{point}]}}}}"#),
+                None,
+            ),
+            (
+                format!(
+                    r#"{{"points": [{point}, {}]}}"#,
+                    point.replace(": 1}", ": 300}")
+                ),
+                Some("points[1].material = 300"),
+            ),
+            (
+                format!(
+                    r#"{{"genome": {{"points": [{}]}}}}"#,
+                    point.replace("1.0", "NaN")
+                ),
+                Some("NaN or Infinity"),
+            ),
+            (
+                format!(
+                    r#"{{"points": [{}]}}"#,
+                    point.replace(r#""falloff": 0.1, "#, "")
+                ),
+                Some("the genome.points[0].falloff is missing"),
+            ),
+            (
+                r#"{"points": 3}"#.to_owned(),
+                Some("points is missing or not a list"),
+            ),
+        ];
+        for (i, (text, error)) in cases.iter().enumerate() {
+            let path = dir.join(format!("{i}.json"));
+            std::fs::write(&path, text).unwrap();
+            match (read_genome(&path), error) {
+                (Ok(g), None) => assert_eq!(g.points.len(), 1),
+                (Err(e), Some(expected)) => {
+                    let e = e.to_string();
+                    assert!(e.contains(expected), "{text}: {e}");
+                }
+                (other, _) => panic!("{text}: {:?}", other.map(|g| g.points.len())),
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn resolutions_parse_strictly() {
         assert_eq!(
             parse_resolution("12x12x40").unwrap(),
             GridDims::new(12, 12, 40)
         );
-        for bad in ["12x12", "0x1x1", "axbxc", "1x2x3x4", ""] {
+        for bad in [
+            "12x12",
+            "0x1x1",
+            "axbxc",
+            "1x2x3x4",
+            "",
+            "1000x1000x1000",
+            "1x4294967296x1",
+        ] {
             assert!(parse_resolution(bad).is_err(), "{bad}");
         }
     }

@@ -48,7 +48,12 @@ pub struct Pool {
 }
 
 impl Pool {
-    pub fn new(threads: usize, mode: EvaluationMode, done: UnboundedSender<JobDone>) -> Self {
+    /// Starts `threads` threads; fails (instead of panicking) when the system will not give them.
+    pub fn new(
+        threads: usize,
+        mode: EvaluationMode,
+        done: UnboundedSender<JobDone>,
+    ) -> std::io::Result<Self> {
         let (jobs, queue) = channel::<Job>();
         let queue = Arc::new(Mutex::new(queue));
         for i in 0..threads {
@@ -56,10 +61,9 @@ impl Pool {
             let done = done.clone();
             std::thread::Builder::new()
                 .name(format!("evaluate-{i}"))
-                .spawn(move || work(&queue, mode, &done))
-                .expect("spawning an evaluation thread");
+                .spawn(move || work(&queue, mode, &done))?;
         }
-        Self { jobs, threads }
+        Ok(Self { jobs, threads })
     }
 
     pub fn threads(&self) -> usize {

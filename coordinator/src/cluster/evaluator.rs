@@ -72,7 +72,7 @@ impl Evaluator for ClusterEvaluator {
         self.queue
             .take_noted_errors()
             .into_iter()
-            .map(|(t, w, m)| (TaskId(t), w, m))
+            .map(|(t, w, m)| (t, w.to_string(), m))
             .collect()
     }
 }

@@ -18,8 +18,15 @@ use tonic::transport::{Identity, Server, ServerTlsConfig};
 use tonic::{Request, Status};
 use tracing::{info, warn};
 
+use super::connections::{ConnectionLimits, IDLE_TIMEOUT};
 use super::queue::TaskQueue;
 use super::service::CoordinatorService;
+
+/// Concurrent calls on one connection: a worker needs three (a lease, a report, a heartbeat).
+const MAX_STREAMS_PER_CONNECTION: u32 = 64;
+const MAX_HEADER_BYTES: u32 = 16 << 10;
+/// Longest any call may take, reading its request included.
+const CALL_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// How the server listens and whom it lets in.
 #[derive(Clone, Debug, Default)]
@@ -34,7 +41,8 @@ pub struct ServerOptions {
 
 #[derive(Debug, thiserror::Error)]
 pub enum ServerError {
-    #[error("cannot listen on {listen}: {source}")]
+    // The cause is the source, printed once by whoever prints the chain.
+    #[error("cannot listen on {listen}")]
     Bind {
         listen: String,
         source: std::io::Error,
@@ -106,6 +114,21 @@ fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
 }
 
+/// A PEM file, checked for its markers here: rustls would only say "transport error" later.
+fn read_pem(path: &PathBuf, key: &str, markers: &[&str]) -> Result<Vec<u8>, ServerError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| ServerError::Tls(format!("{key} {}: {e}", path.display())))?;
+    let text = String::from_utf8_lossy(&bytes);
+    if !markers.iter().all(|m| text.contains(m)) {
+        return Err(ServerError::Tls(format!(
+            "{key} {}: not a PEM file (no {} line)",
+            path.display(),
+            markers.concat()
+        )));
+    }
+    Ok(bytes)
+}
+
 /// Binds and starts serving on the current tokio runtime.
 pub async fn start(
     options: &ServerOptions,
@@ -138,19 +161,38 @@ pub async fn start(
         .set_service_status("", tonic_health::ServingStatus::Serving)
         .await;
 
+    // Bounds on what one peer can hold open (docs/cluster.md, "Threat model"): streams per
+    // connection, header size, and a deadline on every call (a lease waits at most 5 s, so an
+    // honest call never comes near it) that also ends requests whose body never finishes.
     let mut builder = Server::builder()
         .tcp_nodelay(true)
         .http2_keepalive_interval(Some(Duration::from_secs(10)))
-        .http2_keepalive_timeout(Some(Duration::from_secs(10)));
+        .http2_keepalive_timeout(Some(Duration::from_secs(10)))
+        .max_concurrent_streams(MAX_STREAMS_PER_CONNECTION)
+        .http2_max_header_list_size(MAX_HEADER_BYTES)
+        .timeout(CALL_TIMEOUT);
     if let Some((cert, key)) = &options.tls {
-        let read = |p: &PathBuf| {
-            std::fs::read(p).map_err(|e| ServerError::Tls(format!("{}: {e}", p.display())))
-        };
-        let identity = Identity::from_pem(read(cert)?, read(key)?);
+        let identity = Identity::from_pem(
+            read_pem(cert, "cluster.tls_cert", &["-----BEGIN CERTIFICATE-----"])?,
+            read_pem(key, "cluster.tls_key", &["-----BEGIN ", "PRIVATE KEY-----"])?,
+        );
         builder = builder
             .tls_config(ServerTlsConfig::new().identity(identity))
-            .map_err(|e| ServerError::Tls(e.to_string()))?;
+            .map_err(|e| {
+                let mut message = e.to_string();
+                let mut cause = std::error::Error::source(&e);
+                while let Some(c) = cause {
+                    message = format!("{message}: {c}");
+                    cause = c.source();
+                }
+                ServerError::Tls(format!(
+                    "cluster.tls_cert and cluster.tls_key cannot be used ({message}): both must be PEM, the key the certificate's"
+                ))
+            })?;
     }
+    let limits = Arc::new(ConnectionLimits::default());
+    // Honest workers send something every heartbeat interval.
+    let idle = IDLE_TIMEOUT.max(queue.rules().heartbeat_interval * 3);
     let (stop, mut stopped) = watch::channel(false);
     let router = builder.add_service(health_service).add_service(service);
     let serve = tokio::spawn(async move {
@@ -158,11 +200,14 @@ pub async fn start(
             let _ = stopped.wait_for(|s| *s).await;
         };
         // Serving a listener we bound ourselves bypasses the builder's TCP options: switch Nagle
-        // off here, or a lease and a report in flight together stall on delayed ACKs.
-        let incoming = TcpListenerStream::new(listener).map(|stream| {
-            stream.inspect(|s| {
+        // off here, or a lease and a report in flight together stall on delayed ACKs. Then the
+        // connection limits: a connection over them is dropped, that is closed, at once.
+        let incoming = TcpListenerStream::new(listener).filter_map(move |stream| match stream {
+            Ok(s) => {
                 let _ = s.set_nodelay(true);
-            })
+                limits.admit(s, idle).map(Ok)
+            }
+            Err(e) => Some(Err(e)),
         });
         if let Err(e) = router
             .serve_with_incoming_shutdown(incoming, shutdown)

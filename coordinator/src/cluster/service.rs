@@ -1,29 +1,31 @@
 //! The gRPC face of the task queue: the `EvaluationCoordinator` service workers call. Everything a
 //! peer sends is validated here before the queue sees it; every refusal is a status naming what
-//! was wrong, and none of them disturbs the run.
+//! was wrong (`status.rs`), and none of them disturbs the run.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use amorph_proto::convert;
 use amorph_proto::v1::evaluation_coordinator_server::EvaluationCoordinator;
 use amorph_proto::v1::{self, task_result};
-use amorph_proto::{PROTOCOL_VERSION, convert};
 use tonic::{Request, Response, Status};
 use tracing::warn;
 
-use super::queue::{Disposition, QueueError, TaskQueue};
+use super::peer_text::{self, MAX_ERROR_CHARS, MAX_NAME_CHARS};
+use super::queue::{Disposition, TaskQueue};
+use super::status;
+use amorph::task::Outcome;
 
-/// Largest capacity a worker may claim, results per report, ids per heartbeat or release.
-const MAX_CAPACITY: u32 = 1024;
-const MAX_IDS_PER_CALL: usize = 4096;
+use crate::ids::TaskId;
+
 /// Longest a lease call is held open waiting for work.
 const MAX_LEASE_WAIT: Duration = Duration::from_secs(5);
-const MAX_NAME_CHARS: usize = 128;
-const MAX_ERROR_CHARS: usize = 2000;
 
 #[derive(Debug)]
 pub struct CoordinatorService {
     queue: Arc<TaskQueue>,
+    /// The run's scene: every reported outcome is checked against what it can produce.
+    scene: amorph::task::Scene,
     scene_id: String,
     scene_json: Vec<u8>,
 }
@@ -32,6 +34,7 @@ impl CoordinatorService {
     pub fn new(queue: Arc<TaskQueue>, scene: &amorph::task::Scene) -> Self {
         Self {
             queue,
+            scene: scene.clone(),
             scene_id: convert::scene_id(scene),
             scene_json: convert::scene_to_wire(scene),
         }
@@ -53,26 +56,27 @@ impl CoordinatorService {
     }
 }
 
-fn status(e: QueueError) -> Status {
-    match e {
-        QueueError::UnknownWorker(_) | QueueError::UnknownTask(_) => {
-            Status::not_found(e.to_string())
-        }
-        QueueError::NotLeasedTo { .. } => Status::failed_precondition(e.to_string()),
+impl CoordinatorService {
+    /// An outcome is a claim: refused (as malformed) unless the run's scene can produce it at
+    /// the task's resolution (`Task::check_metrics`: the fitness and derived figures recomputed
+    /// to the bit, the rest bounded by the physics). Before anything (a plot, a report, the
+    /// search) consumes it.
+    fn checked(&self, task: TaskId, outcome: Outcome) -> Result<Outcome, convert::WireError> {
+        let Some(dims) = self.queue.task_dims(task) else {
+            return Ok(outcome); // unknown or finished: the queue answers for it
+        };
+        self.scene
+            .check_outcome(&outcome, dims)
+            .map_err(|message| convert::WireError::Malformed {
+                field: "outcome.evaluated",
+                message,
+            })?;
+        Ok(outcome)
     }
 }
 
-fn truncated(text: &str, max: usize) -> String {
-    match text.char_indices().nth(max) {
-        Some((i, _)) => format!("{}…", &text[..i]),
-        None => text.to_owned(),
-    }
-}
-
-fn too_many(field: &str, n: usize) -> Status {
-    Status::invalid_argument(format!(
-        "{field}: {n} entries, at most {MAX_IDS_PER_CALL} per call"
-    ))
+fn task_ids(ids: &[u64]) -> Vec<TaskId> {
+    ids.iter().copied().map(TaskId).collect()
 }
 
 #[tonic::async_trait]
@@ -83,30 +87,22 @@ impl EvaluationCoordinator for CoordinatorService {
     ) -> Result<Response<v1::RegisterResponse>, Status> {
         let peer = request.remote_addr();
         let r = request.into_inner();
-        if r.protocol_version != PROTOCOL_VERSION {
+        status::protocol_version(r.protocol_version).inspect_err(|_| {
             warn!(
                 ?peer,
                 version = r.protocol_version,
                 "worker of another protocol version refused"
             );
-            return Err(Status::failed_precondition(format!(
-                "protocol version {} is not supported: this coordinator speaks version {PROTOCOL_VERSION}",
-                r.protocol_version
-            )));
-        }
-        if r.capacity == 0 || r.capacity > MAX_CAPACITY {
-            return Err(Status::invalid_argument(format!(
-                "capacity = {} must be between 1 and {MAX_CAPACITY}",
-                r.capacity
-            )));
-        }
+        })?;
+        status::capacity(r.capacity)?;
+        let name = peer_text::clean(&r.name, MAX_NAME_CHARS);
         let name = match peer {
-            Some(addr) => format!("{} @{addr}", truncated(&r.name, MAX_NAME_CHARS)),
-            None => truncated(&r.name, MAX_NAME_CHARS),
+            Some(addr) => format!("{name} @{addr}"),
+            None => name,
         };
         let worker_id = self.queue.register(&name, r.capacity, Instant::now());
         Ok(Response::new(v1::RegisterResponse {
-            worker_id,
+            worker_id: worker_id.to_string(),
             heartbeat_interval_ms: self.queue.rules().heartbeat_interval.as_millis() as u32,
         }))
     }
@@ -116,6 +112,7 @@ impl EvaluationCoordinator for CoordinatorService {
         request: Request<v1::LeaseRequest>,
     ) -> Result<Response<v1::LeaseResponse>, Status> {
         let r = request.into_inner();
+        let worker = status::worker_id(&r.worker_id)?;
         let wait = Duration::from_millis(u64::from(r.wait_ms)).min(MAX_LEASE_WAIT);
         let deadline = tokio::time::Instant::now() + wait;
         loop {
@@ -123,10 +120,7 @@ impl EvaluationCoordinator for CoordinatorService {
             let notified = self.queue.work_notified();
             tokio::pin!(notified);
             notified.as_mut().enable();
-            let (tasks, run_finished) = self
-                .queue
-                .lease(&r.worker_id, r.max_tasks, Instant::now())
-                .map_err(status)?;
+            let (tasks, run_finished) = self.queue.lease(worker, r.max_tasks, Instant::now())?;
             if !tasks.is_empty() || run_finished || tokio::time::Instant::now() >= deadline {
                 return Ok(Response::new(v1::LeaseResponse {
                     tasks: tasks.iter().map(|t| self.wire_task(t)).collect(),
@@ -144,34 +138,41 @@ impl EvaluationCoordinator for CoordinatorService {
         request: Request<v1::ReportRequest>,
     ) -> Result<Response<v1::ReportResponse>, Status> {
         let r = request.into_inner();
-        if r.results.len() > MAX_IDS_PER_CALL {
-            return Err(too_many("results", r.results.len()));
-        }
+        let worker = status::worker_id(&r.worker_id)?;
+        status::list_length("results", r.results.len())?;
         let mut dispositions = Vec::with_capacity(r.results.len());
         // Every valid result is recorded even if another in the same call is refused; the first
         // refusal is returned after, so the worker learns of it.
         let mut refusal: Option<Status> = None;
         for result in r.results {
+            let task = TaskId(result.task_id);
             let wall = if result.wall_seconds.is_finite() && result.wall_seconds >= 0.0 {
                 result.wall_seconds
             } else {
                 0.0
             };
             let (outcome, malformed) = match result.result {
-                Some(task_result::Result::Outcome(o)) => match convert::outcome_from_wire(&o) {
+                Some(task_result::Result::Outcome(o)) => match convert::outcome_from_wire(&o)
+                    .and_then(|outcome| self.checked(TaskId(result.task_id), outcome))
+                {
                     Ok(outcome) => (Ok(outcome), false),
-                    Err(e) => (Err(format!("malformed outcome: {e}")), true),
+                    Err(e) => (
+                        Err(format!(
+                            "malformed outcome: {}",
+                            peer_text::clean(&e.to_string(), MAX_ERROR_CHARS)
+                        )),
+                        true,
+                    ),
                 },
-                Some(task_result::Result::Error(e)) => (Err(truncated(&e, MAX_ERROR_CHARS)), false),
+                Some(task_result::Result::Error(e)) => {
+                    (Err(peer_text::clean(&e, MAX_ERROR_CHARS)), false)
+                }
                 None => (Err("malformed report: result is missing".into()), true),
             };
             if malformed {
-                warn!(worker = %r.worker_id, task = result.task_id, "malformed outcome noted as the worker's error");
+                warn!(%worker, %task, "malformed outcome noted as the worker's error");
             }
-            match self
-                .queue
-                .report(&r.worker_id, result.task_id, outcome, wall)
-            {
+            match self.queue.report(worker, task, outcome, wall) {
                 Ok(d) => dispositions.push(match (d, malformed) {
                     (Disposition::Accepted, _) => v1::ReportDisposition::Accepted,
                     (Disposition::Duplicate, _) => v1::ReportDisposition::Duplicate,
@@ -179,9 +180,9 @@ impl EvaluationCoordinator for CoordinatorService {
                     (Disposition::ErrorNoted, false) => v1::ReportDisposition::ErrorNoted,
                 } as i32),
                 Err(e) => {
-                    warn!(worker = %r.worker_id, task = result.task_id, error = %e, "report refused");
+                    warn!(%worker, %task, error = %e, "report refused");
                     dispositions.push(v1::ReportDisposition::Unspecified as i32);
-                    refusal.get_or_insert_with(|| status(e));
+                    refusal.get_or_insert_with(|| e.into());
                 }
             }
         }
@@ -196,15 +197,14 @@ impl EvaluationCoordinator for CoordinatorService {
         request: Request<v1::HeartbeatRequest>,
     ) -> Result<Response<v1::HeartbeatResponse>, Status> {
         let r = request.into_inner();
-        if r.active_task_ids.len() > MAX_IDS_PER_CALL {
-            return Err(too_many("active_task_ids", r.active_task_ids.len()));
-        }
-        let (revoked_task_ids, run_finished) = self
-            .queue
-            .heartbeat(&r.worker_id, &r.active_task_ids, Instant::now())
-            .map_err(status)?;
+        status::protocol_version(r.protocol_version)?;
+        let worker = status::worker_id(&r.worker_id)?;
+        status::list_length("active_task_ids", r.active_task_ids.len())?;
+        let (revoked, run_finished) =
+            self.queue
+                .heartbeat(worker, &task_ids(&r.active_task_ids), Instant::now())?;
         Ok(Response::new(v1::HeartbeatResponse {
-            revoked_task_ids,
+            revoked_task_ids: revoked.into_iter().map(|t| t.0).collect(),
             run_finished,
         }))
     }
@@ -214,13 +214,9 @@ impl EvaluationCoordinator for CoordinatorService {
         request: Request<v1::ReleaseRequest>,
     ) -> Result<Response<v1::ReleaseResponse>, Status> {
         let r = request.into_inner();
-        if r.task_ids.len() > MAX_IDS_PER_CALL {
-            return Err(too_many("task_ids", r.task_ids.len()));
-        }
-        let released = self
-            .queue
-            .release(&r.worker_id, &r.task_ids)
-            .map_err(status)?;
+        let worker = status::worker_id(&r.worker_id)?;
+        status::list_length("task_ids", r.task_ids.len())?;
+        let released = self.queue.release(worker, &task_ids(&r.task_ids))?;
         Ok(Response::new(v1::ReleaseResponse { released }))
     }
 
@@ -230,10 +226,7 @@ impl EvaluationCoordinator for CoordinatorService {
     ) -> Result<Response<v1::FetchSceneResponse>, Status> {
         let r = request.into_inner();
         if r.scene_id != self.scene_id {
-            return Err(Status::not_found(format!(
-                "scene {} is not this run's scene",
-                truncated(&r.scene_id, 80)
-            )));
+            return Err(status::unknown_scene(&r.scene_id));
         }
         Ok(Response::new(v1::FetchSceneResponse {
             scene_json: self.scene_json.clone(),

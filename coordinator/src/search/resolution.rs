@@ -42,13 +42,9 @@ impl ResolutionSchedule {
         if self.levels.is_empty() {
             return Err("resolution.levels must list at least one resolution".into());
         }
-        const MAX_CELLS: usize = 64 * 64 * 256;
         for (i, l) in self.levels.iter().enumerate() {
-            if l.contains(&0) || l.iter().product::<usize>() > MAX_CELLS {
-                return Err(format!(
-                    "resolution.levels[{i}] = {l:?}: each count must be positive and the grid at most {MAX_CELLS} cells"
-                ));
-            }
+            amorph_proto::grid::checked_grid(l.map(|n| n as u64))
+                .map_err(|e| format!("resolution.levels[{i}] = {l:?}: {e}"))?;
         }
         if !(self.min_improvement.is_finite() && self.min_improvement >= 0.0) {
             return Err("resolution.min_improvement must be a non-negative number".into());

@@ -62,6 +62,9 @@ pub trait Task {
     const FIGURE: Figure;
     /// Whether the task has a stop target (`budget.target_rms_percent`), see [`Task::meets_target`].
     const HAS_TARGET: bool;
+    /// Peak memory of an evaluation per voxel of the resolution, bytes, measured and rounded up
+    /// (docs/cluster.md, "Memory budget"), so a worker refuses a task it could not finish.
+    const BYTES_PER_VOXEL: u64;
 
     /// Checks every field, naming the first bad one.
     fn validate(&self) -> Result<(), SceneError>;
@@ -222,6 +225,11 @@ macro_rules! tasks {
                         .unwrap_or_else(|| "unknown panic".into());
                     Outcome::failed(Failure::Internal(message))
                 })
+            }
+
+            /// Peak memory of an evaluation per voxel, bytes (see [`Task::BYTES_PER_VOXEL`]).
+            pub fn bytes_per_voxel(&self) -> u64 {
+                match self { $(Scene::$variant(_) => <$scene as Task>::BYTES_PER_VOXEL),+ }
             }
 
             /// The figure history and progress plots follow for this task.

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use amorph::genome::Genome;
 use amorph::task::Scene;
 use amorph::voxel::GridDims;
-use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
+use amorph_worker::{WorkerOptions, run_worker};
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
@@ -56,9 +56,10 @@ struct Connect {
     /// On SIGTERM, seconds to let running evaluations finish before handing them back.
     #[arg(long, default_value_t = 30.0)]
     grace_seconds: f64,
-    /// Answer every task at once without physics: measures the coordinator's dispatch capacity.
-    #[arg(long, hide = true)]
-    instant: bool,
+    /// Memory all evaluations at once may use, e.g. 8G or 512M (default: half the machine's).
+    /// A task whose estimated need exceeds this divided by the threads is refused, not started.
+    #[arg(long)]
+    max_memory: Option<String>,
     /// Log level when RUST_LOG is not set.
     #[arg(long, default_value = "warn")]
     log: String,
@@ -129,11 +130,10 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     match command {
         Command::Evaluate { design } => {
             let (genome, scene, dims) = design.load()?;
+            amorph_worker::memory::check(&scene, dims, amorph_worker::memory::default_budget())
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             let outcome = scene.evaluate(&genome, dims);
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&outcome).context("serialising the outcome")?
-            );
+            print(&serde_json::to_string_pretty(&outcome).context("serialising the outcome")?)?;
         }
         Command::Export {
             design,
@@ -160,7 +160,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             let artefacts = scene
                 .write_artefacts(&out, &genome, dims, &outcome)
                 .with_context(|| format!("writing the task's pictures into {}", out.display()))?;
-            println!(
+            print(&format!(
                 "{} voxels, {}; wrote {} files into {}",
                 grid.filled_count(),
                 scene
@@ -168,10 +168,20 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                     .unwrap_or_else(|| format!("{outcome:?}")),
                 files.len() + artefacts.len(),
                 out.display()
-            );
+            ))?;
         }
     }
     Ok(())
+}
+
+/// Writes a line to stdout. A closed pipe (`worker evaluate | head`) ends the output quietly
+/// instead of panicking as `println!` does.
+fn print(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    match writeln!(std::io::stdout().lock(), "{text}") {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e).context("writing to stdout"),
+        _ => Ok(()),
+    }
 }
 
 fn serve(c: Connect) -> anyhow::Result<()> {
@@ -188,7 +198,11 @@ fn serve(c: Connect) -> anyhow::Result<()> {
     let threads = c
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    anyhow::ensure!(threads >= 1, "--threads must be at least 1");
+    anyhow::ensure!(
+        (1..=amorph_worker::client::MAX_THREADS).contains(&threads),
+        "--threads {threads} must be between 1 and {}",
+        amorph_worker::client::MAX_THREADS
+    );
     let seconds = |name: &str, s: f64| {
         anyhow::ensure!(
             s.is_finite() && s >= 0.0,
@@ -209,11 +223,12 @@ fn serve(c: Connect) -> anyhow::Result<()> {
         .map(|s| seconds("--give-up-after", s))
         .transpose()?;
     opts.grace = seconds("--grace-seconds", c.grace_seconds)?;
-    opts.mode = if c.instant {
-        EvaluationMode::Instant
-    } else {
-        EvaluationMode::Physics
-    };
+    opts.max_memory = c
+        .max_memory
+        .as_deref()
+        .map(amorph_worker::memory::parse_size)
+        .transpose()
+        .map_err(|e| anyhow::anyhow!("--max-memory {e}"))?;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()

@@ -28,6 +28,8 @@ impl Task for BeamScene {
         log: true,
     };
     const HAS_TARGET: bool = true;
+    /// The static solve held 11.2 kB per voxel from 12x48x12 to 32x96x32.
+    const BYTES_PER_VOXEL: u64 = 16 << 10;
 
     fn validate(&self) -> Result<(), SceneError> {
         BeamScene::validate(self)

@@ -30,6 +30,8 @@ impl Task for LocomotionScene {
         log: false,
     };
     const HAS_TARGET: bool = false;
+    /// The simulation held 0.53 kB per voxel.
+    const BYTES_PER_VOXEL: u64 = 2 << 10;
 
     fn validate(&self) -> Result<(), SceneError> {
         LocomotionScene::validate(self)

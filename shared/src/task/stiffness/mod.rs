@@ -27,6 +27,8 @@ impl Task for StiffnessScene {
         log: false,
     };
     const HAS_TARGET: bool = false;
+    /// The beam's static solve, on the same load case.
+    const BYTES_PER_VOXEL: u64 = 16 << 10;
 
     fn validate(&self) -> Result<(), SceneError> {
         StiffnessScene::validate(self)

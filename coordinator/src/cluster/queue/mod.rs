@@ -1,0 +1,465 @@
+//! The task queue with leases: the coordinator's whole bookkeeping of who evaluates what.
+//!
+//! A synchronous state machine behind one mutex, with the time passed in, so every rule (lease
+//! expiry, silent workers, duplicate and late reports, retries) is tested without a network. The
+//! gRPC service calls it; the search submits one batch at a time and collects its completions
+//! from a channel as they arrive (so the run store records each one at once).
+//!
+//! Each task of the batch is in one phase (`task.rs`): **queued → leased → done | failed**, and
+//! leased → queued when a lease lapses, its worker goes silent or hands it back, or the holder
+//! reports an error. Done and failed are final: such a task is never leased again and sends
+//! exactly one completion. Rules:
+//! - A lease lasts `lease` from when it is granted or last named in a heartbeat by its holder.
+//! - The first outcome reported for a task wins, even from a worker whose lease has lapsed (the
+//!   evaluation is a pure function, so a late outcome is as good as any); later ones are
+//!   duplicates and change nothing.
+//! - A worker may report only tasks it was leased at some point, and answers each at most once.
+//! - A worker's error (or a malformed outcome) is noted; the task is not leased to that worker
+//!   again, and is marked failed only once `max_attempts` *different* workers have given errors,
+//!   so one worker cannot fail a task however often it reports.
+
+mod task;
+
+#[cfg(test)]
+mod properties;
+#[cfg(test)]
+mod tests;
+
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+use amorph::task::Outcome;
+use tracing::{info, warn};
+
+use crate::evaluator::{Completion, Task};
+use crate::ids::{TaskId, WorkerId};
+use task::{Phase, TaskState};
+
+/// Timing and retry rules of the queue.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QueueRules {
+    /// How long a lease lasts without a heartbeat naming its task.
+    pub lease: Duration,
+    /// How often workers are asked to heartbeat.
+    pub heartbeat_interval: Duration,
+    /// A worker silent this long is dropped and its leases go back to the queue.
+    pub worker_timeout: Duration,
+    /// Different workers whose errors mark a task failed rather than retried.
+    pub max_attempts: u32,
+    /// Longest a lease lives from its grant, heartbeats or not, so a worker that names its
+    /// leases in every heartbeat cannot keep them for ever. A lease that runs out goes to
+    /// another worker; the first holder's outcome still counts if it comes first.
+    pub max_lease: Duration,
+}
+
+impl Default for QueueRules {
+    fn default() -> Self {
+        Self {
+            lease: Duration::from_secs(30),
+            heartbeat_interval: Duration::from_secs(1),
+            worker_timeout: Duration::from_secs(5),
+            max_attempts: 3,
+            max_lease: Duration::from_secs(3600),
+        }
+    }
+}
+
+/// What a report did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Disposition {
+    Accepted,
+    Duplicate,
+    ErrorNoted,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum QueueError {
+    #[error("worker {0} is not registered (register again)")]
+    UnknownWorker(WorkerId),
+    #[error("task {0} does not exist")]
+    UnknownTask(TaskId),
+    #[error("{task} was never leased to worker {worker}")]
+    NotLeasedTo { task: TaskId, worker: WorkerId },
+}
+
+/// Counts for progress lines and benchmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct QueueStats {
+    pub workers: usize,
+    pub queued: usize,
+    pub leased: usize,
+    pub dispatched: u64,
+    pub completed: u64,
+    pub duplicates: u64,
+    pub worker_errors: u64,
+    pub expired_leases: u64,
+}
+
+/// A worker's error for a task, for the run store: (task, worker, message).
+pub type NotedError = (TaskId, WorkerId, String);
+
+#[derive(Debug)]
+struct WorkerState {
+    name: String,
+    capacity: u32,
+    last_seen: Instant,
+    leased: HashSet<TaskId>,
+}
+
+#[derive(Debug)]
+struct State {
+    workers: HashMap<WorkerId, WorkerState>,
+    next_worker: u64,
+    /// The current batch, by id.
+    tasks: BTreeMap<TaskId, TaskState>,
+    /// Exactly the tasks in phase `Queued`, leased lowest id first.
+    queued: BTreeSet<TaskId>,
+    /// Tasks of earlier batches and the workers they were leased to, so a late report is told
+    /// apart as a duplicate (it was leased to the reporter) or a forgery (it was not).
+    earlier: HashMap<TaskId, Box<[WorkerId]>>,
+    /// Highest task id ever submitted.
+    highest_task: Option<TaskId>,
+    completions: Option<Sender<Completion>>,
+    noted_errors: Vec<NotedError>,
+    run_finished: bool,
+    stats: QueueStats,
+}
+
+/// The queue shared by the gRPC service, the reaper and the search.
+#[derive(Debug)]
+pub struct TaskQueue {
+    rules: QueueRules,
+    /// Distinguishes this coordinator process's worker ids from a previous one's (after a resume).
+    tag: u32,
+    state: Mutex<State>,
+    /// Wakes leases waiting for work (and for the end of the run).
+    work: tokio::sync::Notify,
+}
+
+impl TaskQueue {
+    pub fn new(rules: QueueRules) -> Self {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        Self {
+            rules,
+            tag: ((nanos ^ (u128::from(std::process::id()) << 20)) & 0xff_ffff) as u32,
+            state: Mutex::new(State {
+                workers: HashMap::new(),
+                next_worker: 0,
+                tasks: BTreeMap::new(),
+                queued: BTreeSet::new(),
+                earlier: HashMap::new(),
+                highest_task: None,
+                completions: None,
+                noted_errors: Vec::new(),
+                run_finished: false,
+                stats: QueueStats::default(),
+            }),
+            work: tokio::sync::Notify::new(),
+        }
+    }
+
+    pub fn rules(&self) -> &QueueRules {
+        &self.rules
+    }
+
+    fn lock(&self) -> MutexGuard<'_, State> {
+        // A panic while holding the lock would be a bug in this module; the state is still
+        // consistent between transitions, so carry on rather than poison every later call.
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Waits until work may be available (a batch was submitted, a lease came back, the run
+    /// ended). Create the future *before* checking the queue so no wake-up is missed.
+    pub fn work_notified(&self) -> tokio::sync::futures::Notified<'_> {
+        self.work.notified()
+    }
+
+    /// Whether this process handed out `worker` (it may since have been dropped as silent).
+    fn issued(&self, s: &State, worker: WorkerId) -> bool {
+        worker.tag == self.tag && worker.serial >= 1 && worker.serial <= s.next_worker
+    }
+
+    /// Registers a worker; `name` must already be cleaned of control characters.
+    pub fn register(&self, name: &str, capacity: u32, now: Instant) -> WorkerId {
+        let mut s = self.lock();
+        s.next_worker += 1;
+        let id = WorkerId {
+            serial: s.next_worker,
+            tag: self.tag,
+        };
+        s.workers.insert(
+            id,
+            WorkerState {
+                name: name.to_owned(),
+                capacity,
+                last_seen: now,
+                leased: HashSet::new(),
+            },
+        );
+        info!(worker = %id, name, capacity, "worker registered");
+        id
+    }
+
+    /// Up to `max` queued tasks for `worker`, capped by the capacity it registered with minus what
+    /// it holds, skipping tasks it already failed. Returns the tasks and whether the run has
+    /// finished.
+    pub fn lease(
+        &self,
+        worker: WorkerId,
+        max: u32,
+        now: Instant,
+    ) -> Result<(Vec<Arc<Task>>, bool), QueueError> {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        let w = s
+            .workers
+            .get_mut(&worker)
+            .ok_or(QueueError::UnknownWorker(worker))?;
+        w.last_seen = now;
+        if s.run_finished {
+            return Ok((Vec::new(), true));
+        }
+        let room = w.capacity.saturating_sub(w.leased.len() as u32).min(max) as usize;
+        let chosen: Vec<TaskId> = s
+            .queued
+            .iter()
+            .filter(|&&id| !s.tasks[&id].failed_by(worker))
+            .take(room)
+            .copied()
+            .collect();
+        let granted: Vec<Arc<Task>> = chosen
+            .into_iter()
+            .map(|id| s.grant(id, worker, now, &self.rules))
+            .collect();
+        s.stats.dispatched += granted.len() as u64;
+        Ok((granted, false))
+    }
+
+    /// The resolution a task asks for, while the queue holds it (to check a reported outcome
+    /// against what its scene can produce at that resolution).
+    pub fn task_dims(&self, task: TaskId) -> Option<amorph::voxel::GridDims> {
+        self.lock().tasks.get(&task).map(|t| t.task.dims)
+    }
+
+    /// Records a worker's result for a task: its outcome, or the error that kept it from
+    /// evaluating (`error` must already be cleaned of control characters).
+    pub fn report(
+        &self,
+        worker: WorkerId,
+        task: TaskId,
+        result: Result<Outcome, String>,
+        wall_seconds: f64,
+    ) -> Result<Disposition, QueueError> {
+        let mut guard = self.lock();
+        if !self.issued(&guard, worker) {
+            return Err(QueueError::UnknownWorker(worker));
+        }
+        let s = &mut *guard;
+        let Some(t) = s.tasks.get_mut(&task) else {
+            return match s.earlier.get(&task) {
+                Some(leased_to) if leased_to.contains(&worker) => {
+                    s.stats.duplicates += 1;
+                    Ok(Disposition::Duplicate)
+                }
+                Some(_) => Err(QueueError::NotLeasedTo { task, worker }),
+                None => Err(QueueError::UnknownTask(task)),
+            };
+        };
+        if !t.leased_to.contains(&worker) {
+            return Err(QueueError::NotLeasedTo { task, worker });
+        }
+        if t.phase.is_final() || t.failed_by(worker) {
+            s.stats.duplicates += 1;
+            return Ok(Disposition::Duplicate);
+        }
+        let disposition = match result {
+            Ok(outcome) => {
+                let by = match s.workers.get(&worker) {
+                    Some(w) => format!("{} ({worker})", w.name),
+                    None => worker.to_string(),
+                };
+                s.finish(task, outcome, by, wall_seconds);
+                Disposition::Accepted
+            }
+            Err(error) => {
+                s.stats.worker_errors += 1;
+                warn!(%worker, %task, %error, "worker could not evaluate a task");
+                t.errors.push((worker, error.clone()));
+                s.noted_errors.push((task, worker, error));
+                // A former holder's error leaves the current holder's lease alone: only the
+                // holder's own error, or a lease coming back, decides what happens next.
+                let phase = s.tasks[&task].phase;
+                match phase {
+                    Phase::Leased { worker: holder, .. } if holder == worker => {
+                        s.requeue_or_fail(task, self.rules.max_attempts);
+                    }
+                    Phase::Queued => s.fail_if_exhausted(task, self.rules.max_attempts),
+                    _ => {}
+                }
+                Disposition::ErrorNoted
+            }
+        };
+        // The reporting worker may have a free slot now, or the task may be queued again: a
+        // waiting lease may be waiting for exactly this.
+        drop(guard);
+        self.work.notify_waiters();
+        Ok(disposition)
+    }
+
+    /// A worker is alive and still evaluating `active`: extend those leases. Returns the tasks of
+    /// `active` it no longer holds, and whether the run has finished.
+    pub fn heartbeat(
+        &self,
+        worker: WorkerId,
+        active: &[TaskId],
+        now: Instant,
+    ) -> Result<(Vec<TaskId>, bool), QueueError> {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        let w = s
+            .workers
+            .get_mut(&worker)
+            .ok_or(QueueError::UnknownWorker(worker))?;
+        w.last_seen = now;
+        let mut revoked = Vec::new();
+        for &id in active {
+            match s.tasks.get_mut(&id).map(|t| &mut t.phase) {
+                Some(Phase::Leased {
+                    worker: holder,
+                    deadline,
+                    expires,
+                }) if *holder == worker => *deadline = (now + self.rules.lease).min(*expires),
+                _ => revoked.push(id),
+            }
+        }
+        Ok((revoked, s.run_finished))
+    }
+
+    /// A worker hands back leases it will not finish (it is shutting down).
+    pub fn release(&self, worker: WorkerId, ids: &[TaskId]) -> Result<u32, QueueError> {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        let w = s
+            .workers
+            .get(&worker)
+            .ok_or(QueueError::UnknownWorker(worker))?;
+        let held: BTreeSet<TaskId> = ids
+            .iter()
+            .filter(|&&id| w.leased.contains(&id))
+            .copied()
+            .collect();
+        for &id in &held {
+            s.requeue_or_fail(id, self.rules.max_attempts);
+        }
+        drop(guard);
+        if !held.is_empty() {
+            self.work.notify_waiters();
+        }
+        Ok(held.len() as u32)
+    }
+
+    /// Returns expired leases and the leases of silent workers to the queue; drops silent workers.
+    /// Called periodically by the server.
+    pub fn reap(&self, now: Instant) {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        let timeout = self.rules.worker_timeout;
+        let silent: Vec<WorkerId> = s
+            .workers
+            .iter()
+            .filter(|(_, w)| now.saturating_duration_since(w.last_seen) >= timeout)
+            .map(|(&id, _)| id)
+            .collect();
+        let mut requeue = BTreeSet::new();
+        for id in &silent {
+            let w = &s.workers[id];
+            warn!(worker = %id, name = %w.name, leases = w.leased.len(), "worker went silent: its leases go back to the queue");
+            requeue.extend(w.leased.iter().copied());
+        }
+        for (&id, t) in &s.tasks {
+            if let Phase::Leased { deadline, .. } = t.phase
+                && deadline <= now
+            {
+                requeue.insert(id);
+            }
+        }
+        for &id in &requeue {
+            s.requeue_or_fail(id, self.rules.max_attempts);
+        }
+        for id in &silent {
+            s.workers.remove(id);
+        }
+        s.warn_unservable();
+        if requeue.is_empty() {
+            return;
+        }
+        s.stats.expired_leases += requeue.len() as u64;
+        info!(
+            tasks = requeue.len(),
+            "leases expired: tasks back in the queue"
+        );
+        drop(guard);
+        self.work.notify_waiters();
+    }
+
+    /// Replaces the current batch with `tasks` (ids must increase) and returns the channel its
+    /// completions arrive on, one per task, in the order they finish.
+    pub fn submit(&self, tasks: Vec<Task>) -> Receiver<Completion> {
+        let (tx, rx) = channel();
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        for w in s.workers.values_mut() {
+            w.leased.clear();
+        }
+        for (id, t) in std::mem::take(&mut s.tasks) {
+            s.earlier.insert(id, t.leased_to.into_boxed_slice());
+        }
+        s.queued.clear();
+        for (slot, task) in tasks.into_iter().enumerate() {
+            let id = task.id;
+            assert!(
+                s.highest_task.is_none_or(|h| id > h),
+                "task ids increase across batches"
+            );
+            s.highest_task = Some(id);
+            s.queued.insert(id);
+            s.tasks.insert(id, TaskState::new(task, slot));
+        }
+        s.completions = Some(tx);
+        drop(guard);
+        self.work.notify_waiters();
+        rx
+    }
+
+    /// Ends the run: leases answer `run_finished`, waiting leases return at once.
+    pub fn finish(&self) {
+        let mut s = self.lock();
+        s.run_finished = true;
+        s.completions = None;
+        drop(s);
+        self.work.notify_waiters();
+    }
+
+    /// Worker errors noted since the last call.
+    pub fn take_noted_errors(&self) -> Vec<NotedError> {
+        std::mem::take(&mut self.lock().noted_errors)
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.lock().run_finished
+    }
+
+    pub fn stats(&self) -> QueueStats {
+        let s = self.lock();
+        QueueStats {
+            workers: s.workers.len(),
+            queued: s.queued.len(),
+            leased: s.workers.values().map(|w| w.leased.len()).sum(),
+            ..s.stats
+        }
+    }
+}

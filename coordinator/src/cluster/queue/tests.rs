@@ -1,0 +1,332 @@
+//! The queue's rules one by one, with the time passed in.
+
+use super::*;
+use amorph::genome::Genome;
+use amorph::outcome::Failure;
+use amorph::voxel::GridDims;
+
+pub(super) fn tasks(ids: std::ops::RangeInclusive<u64>) -> Vec<Task> {
+    ids.map(|id| Task {
+        id: TaskId(id),
+        genome: Genome::default(),
+        dims: GridDims::new(2, 2, 2),
+    })
+    .collect()
+}
+
+pub(super) fn rules() -> QueueRules {
+    QueueRules {
+        lease: Duration::from_secs(10),
+        heartbeat_interval: Duration::from_secs(1),
+        worker_timeout: Duration::from_secs(3),
+        max_attempts: 3,
+        max_lease: Duration::from_secs(60),
+    }
+}
+
+fn ok() -> Result<Outcome, String> {
+    Ok(Outcome::failed(Failure::Empty))
+}
+
+fn ids(leased: &[Arc<Task>]) -> Vec<u64> {
+    leased.iter().map(|t| t.id.0).collect()
+}
+
+const T1: TaskId = TaskId(1);
+const T2: TaskId = TaskId(2);
+
+#[test]
+fn leases_respect_capacity_and_task_order() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let w = q.register("a", 2, t0);
+    let rx = q.submit(tasks(1..=5));
+    assert_eq!(ids(&q.lease(w, 8, t0).unwrap().0), [1, 2]);
+    assert!(q.lease(w, 8, t0).unwrap().0.is_empty(), "at capacity");
+    assert_eq!(q.report(w, T2, ok(), 0.1).unwrap(), Disposition::Accepted);
+    assert_eq!(ids(&q.lease(w, 8, t0).unwrap().0), [3]);
+    assert_eq!(rx.try_recv().unwrap().slot, 1);
+    assert_eq!(q.stats().leased, 2);
+}
+
+#[test]
+fn an_expired_lease_is_redispatched_and_the_late_report_counts_once() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 1, t0);
+    let b = q.register("b", 1, t0);
+    let rx = q.submit(tasks(1..=1));
+    assert_eq!(ids(&q.lease(a, 1, t0).unwrap().0), [1]);
+    // a heartbeats (stays registered) but never names the task: the lease runs out.
+    let later = t0 + Duration::from_secs(11);
+    q.heartbeat(a, &[], later).unwrap();
+    q.heartbeat(b, &[], later).unwrap();
+    q.reap(later);
+    assert_eq!(ids(&q.lease(b, 1, later).unwrap().0), [1]);
+    assert_eq!(q.report(a, T1, ok(), 1.0).unwrap(), Disposition::Accepted);
+    assert_eq!(q.report(b, T1, ok(), 1.0).unwrap(), Disposition::Duplicate);
+    assert!(rx.try_recv().is_ok());
+    assert!(rx.try_recv().is_err(), "exactly one completion");
+    // b still thinks it holds task 1: the heartbeat tells it otherwise.
+    assert_eq!(q.heartbeat(b, &[T1], later).unwrap().0, [T1]);
+}
+
+/// Issue 12, item 2: a late report for a re-queued task was accepted but left the task queued,
+/// so it was leased again and a second (possibly forged) outcome replaced the first.
+#[test]
+fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 1, t0);
+    let b = q.register("b", 1, t0);
+    let rx = q.submit(tasks(1..=1));
+    q.lease(a, 1, t0).unwrap();
+    let later = t0 + Duration::from_secs(11);
+    q.heartbeat(a, &[], later).unwrap();
+    q.heartbeat(b, &[], later).unwrap();
+    q.reap(later);
+    assert_eq!(q.report(a, T1, ok(), 1.0).unwrap(), Disposition::Accepted);
+    assert!(
+        q.lease(b, 1, later).unwrap().0.is_empty(),
+        "done: never leased again"
+    );
+    assert_eq!(
+        rx.try_recv().unwrap().outcome,
+        Outcome::failed(Failure::Empty)
+    );
+    assert!(rx.try_recv().is_err(), "exactly one completion");
+    assert_eq!(q.stats().queued, 0);
+}
+
+/// Issue 12, items 2 and 3: three errors for one task in one `Report` marked it failed, yet it
+/// was leased again; and one worker could fail a task alone.
+#[test]
+fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 1, t0);
+    let b = q.register("b", 1, t0);
+    let rx = q.submit(tasks(1..=1));
+    q.lease(a, 1, t0).unwrap();
+    assert_eq!(
+        q.report(a, T1, Err("nan".into()), 0.0).unwrap(),
+        Disposition::ErrorNoted
+    );
+    for _ in 0..2 {
+        assert_eq!(
+            q.report(a, T1, Err("nan".into()), 0.0).unwrap(),
+            Disposition::Duplicate,
+            "a worker answers a task once"
+        );
+    }
+    assert!(rx.try_recv().is_err(), "one worker cannot fail a task");
+    assert!(
+        q.lease(a, 1, t0).unwrap().0.is_empty(),
+        "not leased again to the worker that failed it"
+    );
+    assert_eq!(ids(&q.lease(b, 1, t0).unwrap().0), [1]);
+    assert_eq!(q.report(b, T1, ok(), 0.0).unwrap(), Disposition::Accepted);
+    assert_eq!(
+        rx.try_recv().unwrap().outcome,
+        Outcome::failed(Failure::Empty)
+    );
+    assert!(rx.try_recv().is_err());
+}
+
+/// A worker that was leased a task once cannot take it from its current holder by reporting an
+/// error for it.
+#[test]
+fn regression_an_error_from_a_former_holder_leaves_the_current_lease_alone() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 1, t0);
+    let b = q.register("b", 1, t0);
+    q.submit(tasks(1..=1));
+    q.lease(a, 1, t0).unwrap();
+    q.release(a, &[T1]).unwrap();
+    q.lease(b, 1, t0).unwrap();
+    assert_eq!(
+        q.report(a, T1, Err("forged".into()), 0.0).unwrap(),
+        Disposition::ErrorNoted
+    );
+    assert!(
+        q.heartbeat(b, &[T1], t0).unwrap().0.is_empty(),
+        "b keeps its lease"
+    );
+    assert_eq!(q.stats().queued, 0);
+    assert_eq!(q.report(b, T1, ok(), 0.0).unwrap(), Disposition::Accepted);
+}
+
+#[test]
+fn heartbeats_keep_leases_and_silence_loses_them() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 1, t0);
+    q.submit(tasks(1..=1));
+    q.lease(a, 1, t0).unwrap();
+    let mut now = t0;
+    for _ in 0..30 {
+        now += Duration::from_secs(1);
+        assert!(q.heartbeat(a, &[T1], now).unwrap().0.is_empty());
+        q.reap(now);
+    }
+    assert_eq!(
+        q.stats().leased,
+        1,
+        "30 s of heartbeats outlast a 10 s lease"
+    );
+    q.reap(now + Duration::from_secs(4));
+    assert_eq!(q.stats().workers, 0, "silent for longer than the timeout");
+    assert_eq!(q.stats().queued, 1);
+    assert_eq!(
+        q.lease(a, 1, now).unwrap_err(),
+        QueueError::UnknownWorker(a)
+    );
+}
+
+#[test]
+fn reports_for_unknown_or_never_leased_tasks_are_refused() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 4, t0);
+    let b = q.register("b", 4, t0);
+    q.submit(tasks(1..=2));
+    q.lease(a, 1, t0).unwrap();
+    assert_eq!(
+        q.report(a, TaskId(99), ok(), 0.0),
+        Err(QueueError::UnknownTask(TaskId(99)))
+    );
+    assert_eq!(
+        q.report(a, TaskId(0), ok(), 0.0),
+        Err(QueueError::UnknownTask(TaskId(0)))
+    );
+    assert_eq!(
+        q.report(b, T1, ok(), 0.0),
+        Err(QueueError::NotLeasedTo {
+            task: T1,
+            worker: b
+        })
+    );
+    assert_eq!(
+        q.report(a, T2, ok(), 0.0),
+        Err(QueueError::NotLeasedTo {
+            task: T2,
+            worker: a
+        })
+    );
+    let forged = WorkerId {
+        serial: 9,
+        tag: a.tag,
+    };
+    assert_eq!(
+        q.report(forged, T1, ok(), 0.0),
+        Err(QueueError::UnknownWorker(forged))
+    );
+    let other_process = WorkerId {
+        tag: a.tag ^ 1,
+        ..a
+    };
+    assert_eq!(
+        q.report(other_process, T1, ok(), 0.0),
+        Err(QueueError::UnknownWorker(other_process))
+    );
+    // Nothing above disturbed the legitimate lease.
+    assert_eq!(q.report(a, T1, ok(), 0.0).unwrap(), Disposition::Accepted);
+}
+
+#[test]
+fn a_task_failing_on_three_different_workers_is_marked_failed_with_the_reasons() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let workers: Vec<_> = ["a", "b", "c"]
+        .iter()
+        .map(|n| q.register(n, 1, t0))
+        .collect();
+    let rx = q.submit(tasks(1..=1));
+    for (i, &w) in workers.iter().enumerate() {
+        assert_eq!(ids(&q.lease(w, 1, t0).unwrap().0), [1]);
+        let d = q.report(w, T1, Err(format!("boom {i}")), 0.0).unwrap();
+        assert_eq!(d, Disposition::ErrorNoted);
+        assert_eq!(
+            rx.try_recv().is_ok(),
+            i == 2,
+            "a completion only at the third worker's error"
+        );
+    }
+    let d = q.register("d", 1, t0);
+    assert!(
+        q.lease(d, 1, t0).unwrap().0.is_empty(),
+        "a failed task is never leased again"
+    );
+    assert_eq!(q.stats().worker_errors, 3);
+    assert_eq!(q.take_noted_errors().len(), 3);
+}
+
+#[test]
+fn released_tasks_go_back_to_the_front() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 2, t0);
+    let b = q.register("b", 2, t0);
+    q.submit(tasks(1..=4));
+    q.lease(a, 2, t0).unwrap();
+    assert_eq!(q.release(a, &[T1, T2]).unwrap(), 2);
+    assert_eq!(q.release(a, &[T1]).unwrap(), 0, "only what it holds");
+    assert_eq!(ids(&q.lease(b, 2, t0).unwrap().0), [1, 2]);
+}
+
+/// Issue 12, item 8: a report for a task of an earlier batch that was never leased to the
+/// reporter was answered DUPLICATE; it is a report for a task the worker never had.
+#[test]
+fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let a = q.register("a", 4, t0);
+    let b = q.register("b", 4, t0);
+    q.submit(tasks(1..=2));
+    q.lease(a, 4, t0).unwrap();
+    q.report(a, T1, ok(), 0.0).unwrap();
+    q.report(a, T2, ok(), 0.0).unwrap();
+    q.submit(tasks(3..=3));
+    assert_eq!(q.report(a, T2, ok(), 0.0).unwrap(), Disposition::Duplicate);
+    assert_eq!(
+        q.report(b, T2, ok(), 0.0),
+        Err(QueueError::NotLeasedTo {
+            task: T2,
+            worker: b
+        })
+    );
+    q.finish();
+    let (leased, finished) = q.lease(a, 4, t0).unwrap();
+    assert!(leased.is_empty() && finished);
+}
+
+/// Issue 12, item 6: a worker that names its leases in every heartbeat kept them for ever (one
+/// held all 95 queued tasks, starving an honest worker). A lease now ends `max_lease` after its
+/// grant; a late outcome from the hoarder would still count if it came first.
+#[test]
+fn regression_heartbeats_cannot_keep_a_lease_past_its_lifetime() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let hoarder = q.register("hoarder", 2, t0);
+    let honest = q.register("honest", 2, t0);
+    q.submit(tasks(1..=2));
+    q.lease(hoarder, 2, t0).unwrap();
+    let mut now = t0;
+    while now < t0 + Duration::from_secs(59) {
+        now += Duration::from_secs(1);
+        assert!(q.heartbeat(hoarder, &[T1, T2], now).unwrap().0.is_empty());
+        q.heartbeat(honest, &[], now).unwrap();
+        q.reap(now);
+    }
+    assert!(
+        q.lease(honest, 2, now).unwrap().0.is_empty(),
+        "within its lifetime"
+    );
+    now += Duration::from_secs(1);
+    q.heartbeat(hoarder, &[T1, T2], now).unwrap();
+    q.heartbeat(honest, &[], now).unwrap();
+    q.reap(now);
+    assert_eq!(ids(&q.lease(honest, 2, now).unwrap().0), [1, 2]);
+    assert_eq!(q.heartbeat(hoarder, &[T1, T2], now).unwrap().0, [T1, T2]);
+}

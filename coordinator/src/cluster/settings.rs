@@ -1,0 +1,238 @@
+//! The `[cluster]` section of a run config as written ([`ClusterSection`]) and as used
+//! ([`ClusterSettings`]: durations, counts and paths checked once, by `TryFrom`, with every bound
+//! named by its key). Nothing here changes a run's result, so it may differ when a run is resumed.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use super::QueueRules;
+
+/// Longest heartbeat interval, lease or worker timeout: a day. `Instant + Duration` panics on
+/// overflow, so a config's `u64::MAX` ms must stop here.
+const MAX_MS: u64 = 24 * 3600 * 1000;
+/// Most local workers, threads per local worker, and attempts per task.
+const MAX_LOCAL_WORKERS: usize = 1024;
+const MAX_LOCAL_THREADS: usize = 1024;
+const MAX_ATTEMPTS: u32 = 100;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ClusterSection {
+    /// Address workers connect to; port 0 picks a free one. 127.0.0.1 keeps the coordinator
+    /// private to this machine; use 0.0.0.0:PORT (with a token) for workers on other machines.
+    pub listen: String,
+    /// Workers started inside the coordinator process, talking to it over loopback gRPC like any
+    /// other worker. Unset: one per core. 0: only external `worker --connect` processes.
+    pub local_workers: Option<usize>,
+    /// Evaluation threads of each local worker.
+    pub local_worker_threads: usize,
+    /// File holding the shared secret workers must present (surrounding whitespace ignored). The
+    /// AMORPH_TOKEN environment variable, if set, takes precedence.
+    pub token_file: Option<PathBuf>,
+    /// PEM certificate chain and private key: serve TLS (workers connect with https://).
+    pub tls_cert: Option<PathBuf>,
+    pub tls_key: Option<PathBuf>,
+    /// Name in the certificate that local workers check (default "localhost").
+    pub tls_domain: Option<String>,
+    /// How often workers heartbeat, ms.
+    pub heartbeat_ms: u64,
+    /// How long a lease lasts without a heartbeat naming its task, ms.
+    pub lease_ms: u64,
+    /// A worker silent this long is dropped and its leases re-queued, ms.
+    pub worker_timeout_ms: u64,
+    /// Different workers whose errors mark a task failed instead of retried.
+    pub max_attempts: u32,
+    /// Longest a lease lives from its grant, heartbeats or not, ms.
+    pub max_lease_ms: u64,
+}
+
+impl Default for ClusterSection {
+    fn default() -> Self {
+        Self {
+            listen: "127.0.0.1:0".into(),
+            local_workers: None,
+            local_worker_threads: 1,
+            token_file: None,
+            tls_cert: None,
+            tls_key: None,
+            tls_domain: None,
+            heartbeat_ms: 1000,
+            lease_ms: 10_000,
+            worker_timeout_ms: 5000,
+            max_attempts: 3,
+            max_lease_ms: 3_600_000,
+        }
+    }
+}
+
+impl ClusterSection {
+    /// The shared secret: AMORPH_TOKEN, else the token file, else none.
+    pub fn token(&self) -> Result<Option<String>, String> {
+        if let Ok(token) = std::env::var("AMORPH_TOKEN")
+            && !token.trim().is_empty()
+        {
+            return Ok(Some(token.trim().to_owned()));
+        }
+        match &self.token_file {
+            None => Ok(None),
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .map_err(|e| format!("cluster.token_file {}: {e}", path.display()))?;
+                let token = text.trim();
+                if token.is_empty() {
+                    return Err(format!("cluster.token_file {} is empty", path.display()));
+                }
+                Ok(Some(token.to_owned()))
+            }
+        }
+    }
+}
+
+/// The `[cluster]` section, checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClusterSettings {
+    pub listen: String,
+    /// Local workers to start (one per core when the config leaves it unset).
+    pub local_workers: usize,
+    pub local_worker_threads: usize,
+    /// PEM certificate chain and private key.
+    pub tls: Option<(PathBuf, PathBuf)>,
+    pub tls_domain: String,
+    pub rules: QueueRules,
+}
+
+/// `cluster.<key>` in milliseconds, between `min` and a day.
+fn millis(key: &str, ms: u64, min: u64) -> Result<Duration, String> {
+    if !(min..=MAX_MS).contains(&ms) {
+        return Err(format!(
+            "cluster.{key} = {ms} must be between {min} and {MAX_MS} (a day)"
+        ));
+    }
+    Ok(Duration::from_millis(ms))
+}
+
+fn count(key: &str, n: usize, min: usize, max: usize) -> Result<usize, String> {
+    if !(min..=max).contains(&n) {
+        return Err(format!(
+            "cluster.{key} = {n} must be between {min} and {max}"
+        ));
+    }
+    Ok(n)
+}
+
+impl TryFrom<&ClusterSection> for ClusterSettings {
+    type Error = String;
+
+    fn try_from(c: &ClusterSection) -> Result<Self, String> {
+        if c.listen.parse::<std::net::SocketAddr>().is_err()
+            && !c
+                .listen
+                .rsplit_once(':')
+                .is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok())
+        {
+            return Err(format!("cluster.listen = {:?} is not HOST:PORT", c.listen));
+        }
+        let local_workers = match c.local_workers {
+            Some(n) => count("local_workers", n, 0, MAX_LOCAL_WORKERS)?,
+            None => std::thread::available_parallelism()
+                .map_or(1, |n| n.get())
+                .min(MAX_LOCAL_WORKERS),
+        };
+        let local_worker_threads = count(
+            "local_worker_threads",
+            c.local_worker_threads,
+            1,
+            MAX_LOCAL_THREADS,
+        )?;
+        let tls = match (&c.tls_cert, &c.tls_key) {
+            (Some(cert), Some(key)) => Some((cert.clone(), key.clone())),
+            (None, None) => None,
+            _ => {
+                return Err(
+                    "cluster.tls_cert and cluster.tls_key go together: set both or neither".into(),
+                );
+            }
+        };
+        let heartbeat_interval = millis("heartbeat_ms", c.heartbeat_ms, 10)?;
+        let lease = millis("lease_ms", c.lease_ms, 10)?;
+        let worker_timeout = millis("worker_timeout_ms", c.worker_timeout_ms, 10)?;
+        if lease <= heartbeat_interval {
+            return Err("cluster.lease_ms must be longer than cluster.heartbeat_ms".into());
+        }
+        if worker_timeout <= heartbeat_interval {
+            return Err(
+                "cluster.worker_timeout_ms must be longer than cluster.heartbeat_ms".into(),
+            );
+        }
+        let max_lease = millis("max_lease_ms", c.max_lease_ms, c.lease_ms)?;
+        if !(1..=MAX_ATTEMPTS).contains(&c.max_attempts) {
+            return Err(format!(
+                "cluster.max_attempts = {} must be between 1 and {MAX_ATTEMPTS}",
+                c.max_attempts
+            ));
+        }
+        Ok(Self {
+            listen: c.listen.clone(),
+            local_workers,
+            local_worker_threads,
+            tls,
+            tls_domain: c.tls_domain.clone().unwrap_or_else(|| "localhost".into()),
+            rules: QueueRules {
+                lease,
+                heartbeat_interval,
+                worker_timeout,
+                max_attempts: c.max_attempts,
+                max_lease,
+            },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(edit: impl FnOnce(&mut ClusterSection)) -> Result<ClusterSettings, String> {
+        let mut c = ClusterSection::default();
+        edit(&mut c);
+        ClusterSettings::try_from(&c)
+    }
+
+    #[test]
+    fn defaults_are_valid_and_become_durations() {
+        let s = settings(|_| {}).unwrap();
+        assert_eq!(s.rules.lease, Duration::from_secs(10));
+        assert_eq!(s.rules.worker_timeout, Duration::from_secs(5));
+        assert_eq!(s.tls_domain, "localhost");
+        assert!(s.local_workers >= 1);
+    }
+
+    /// Issue 12, item 4: `local_workers = 100000` panicked in the worker pool, and a lease of
+    /// `u64::MAX` ms would panic adding it to an `Instant`; each is now one line naming the key.
+    #[test]
+    fn regression_sizes_and_durations_out_of_bounds_name_their_key() {
+        type Edit = fn(&mut ClusterSection);
+        let cases: [(&str, Edit); 7] = [
+            ("cluster.local_workers = 100000", |c| {
+                c.local_workers = Some(100_000)
+            }),
+            ("cluster.local_worker_threads = 0", |c| {
+                c.local_worker_threads = 0
+            }),
+            ("cluster.lease_ms = 18446744073709551615", |c| {
+                c.lease_ms = u64::MAX
+            }),
+            ("cluster.worker_timeout_ms = 5", |c| c.worker_timeout_ms = 5),
+            ("cluster.heartbeat_ms = 1", |c| c.heartbeat_ms = 1),
+            ("cluster.max_attempts = 0", |c| c.max_attempts = 0),
+            ("cluster.listen", |c| c.listen = "nowhere".into()),
+        ];
+        for (expected, edit) in cases {
+            let err = settings(edit).unwrap_err();
+            assert!(err.starts_with(expected), "{err}");
+            assert!(!err.contains('\n'));
+        }
+    }
+}
