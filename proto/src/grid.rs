@@ -2,7 +2,7 @@
 //! task on the wire and `worker evaluate --resolution` are all checked here, so what a config
 //! may ask for is exactly what a worker will take.
 //!
-//! 1 Mi voxels is 1.3 times the largest grid the benchmarks use (64x200x64) and 400 times the
+//! 1 Mi voxels is 1.3 times the largest grid the benchmarks use (64x200x64) and 182 times the
 //! paper's 12x40x12 beam. Counts arrive as `u64` so a config's 2^32 cannot wrap before the check.
 
 use amorph::voxel::GridDims;

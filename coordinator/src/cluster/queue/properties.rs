@@ -10,6 +10,7 @@ use proptest::prelude::*;
 use super::tests::{rules, tasks};
 use super::*;
 use amorph::outcome::Failure;
+use std::time::Duration;
 
 const TASKS: u64 = 6;
 

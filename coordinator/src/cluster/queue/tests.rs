@@ -4,6 +4,7 @@ use super::*;
 use amorph::genome::Genome;
 use amorph::outcome::Failure;
 use amorph::voxel::GridDims;
+use std::time::Duration;
 
 pub(super) fn tasks(ids: std::ops::RangeInclusive<u64>) -> Vec<Task> {
     ids.map(|id| Task {
