@@ -18,11 +18,18 @@ const SEED: u64 = 12;
 
 type Client = EvaluationCoordinatorClient<Channel>;
 
+/// The clean run every attacked run must end equal to, computed once per test process (the tests
+/// run in parallel and would otherwise share its results folder).
 fn reference() -> String {
-    fingerprint(&run_locally(
-        &small_beam_config(&scratch_dir("hostile-reference"), EVALUATIONS, SEED),
-        2,
-    ))
+    static REFERENCE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    REFERENCE
+        .get_or_init(|| {
+            fingerprint(&run_locally(
+                &small_beam_config(&scratch_dir("hostile-reference"), EVALUATIONS, SEED),
+                2,
+            ))
+        })
+        .clone()
 }
 
 fn runtime() -> tokio::runtime::Runtime {
@@ -127,6 +134,61 @@ fn forged() -> v1::Outcome {
             metrics_json: b"{}".to_vec(),
         })),
     }
+}
+
+/// Issue 12, item 1: an outcome is a claim checked against what the run's scene can produce.
+/// Before the fix a beam profile station at x = -1.7e308 (finite, so accepted) crashed the end of
+/// the run in the plot code, and again on every resume; a fitness better than the design's own
+/// profile changed the result. Both are refused now, the worker's task goes to another worker,
+/// and the run ends as a clean run.
+#[test]
+fn regression_an_outcome_the_scene_cannot_produce_is_refused() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("hostile-implausible"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, 2, "liar").await;
+        let held = lease(&mut c, &liar, 2).await;
+        for (k, task) in held.iter().enumerate() {
+            let honest = evaluate(&mut c, task).await;
+            let Some(v1::outcome::Result::Evaluated(e)) = honest.result else {
+                continue; // a failed design has no numbers to forge
+            };
+            let mut metrics: serde_json::Value = serde_json::from_slice(&e.metrics_json).unwrap();
+            let forged = if k == 0 {
+                metrics["beam"]["profile"][1][0] = serde_json::json!(-1.7e308);
+                v1::Evaluated {
+                    fitness: e.fitness,
+                    metrics_json: serde_json::to_vec(&metrics).unwrap(),
+                }
+            } else {
+                v1::Evaluated {
+                    fitness: e.fitness / 2.0, // closer to 0: a better fit than the profile's
+                    metrics_json: e.metrics_json.clone(),
+                }
+            };
+            let r = c
+                .report(report(
+                    &liar,
+                    task.task_id,
+                    task_result::Result::Outcome(v1::Outcome {
+                        result: Some(v1::outcome::Result::Evaluated(forged)),
+                    }),
+                ))
+                .await
+                .unwrap()
+                .into_inner();
+            assert_eq!(
+                r.dispositions,
+                [v1::ReportDisposition::Rejected as i32],
+                "task {k}"
+            );
+        }
+    });
+    let honest = TestWorker::start(&run.url(), 2, None);
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
 }
 
 /// Issue 12, item 2: a worker's lease lapses, the task goes back to the queue, the worker then

@@ -179,9 +179,28 @@ fn ticks((lo, hi): (f64, f64), log: bool) -> (Vec<f64>, (f64, f64)) {
         .find(|s| *s >= raw)
         .unwrap_or(10.0 * magnitude);
     let (a, b) = ((lo / step).floor() * step, (hi / step).ceil() * step);
-    let count = ((b - a) / step).round() as i64;
-    ((0..=count).map(|k| a + step * k as f64).collect(), (a, b))
+    let count = ((b - a) / step).round();
+    if !(a.is_finite() && b.is_finite() && (0.0..=MAX_TICKS).contains(&count)) {
+        // A range near the largest f64 (any finite data must plot): seven even ticks, each
+        // computed as a weighted mean so none overflows.
+        let ticks = (0..=6)
+            .map(|k| f64::from(k) / 6.0)
+            .map(|f| lo * (1.0 - f) + hi * f)
+            .collect();
+        return (ticks, (lo, hi));
+    }
+    (
+        (0..=count as i64).map(|k| a + step * k as f64).collect(),
+        (a, b),
+    )
 }
+
+/// More ticks than a plot can label means the range was not a plottable one.
+const MAX_TICKS: f64 = 100.0;
+
+/// Most steps a line is drawn in: a segment longer than the image runs mostly outside it, and
+/// wild data must not cost unbounded time.
+const MAX_LINE_STEPS: f64 = 8.0 * (WIDTH + HEIGHT) as f64;
 
 fn tick_label(t: f64, log: bool) -> String {
     if log {
@@ -225,7 +244,7 @@ fn square(image: &mut Image, p: [f64; 2], half: f64, c: [u8; 3]) {
 pub(super) fn line(image: &mut Image, a: [f64; 2], b: [f64; 2], c: [u8; 3], thickness: usize) {
     let steps = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()) * 2.0)
         .ceil()
-        .max(1.0) as usize;
+        .clamp(1.0, MAX_LINE_STEPS) as usize;
     let t = thickness as i64;
     for k in 0..=steps {
         let f = k as f64 / steps as f64;
@@ -325,6 +344,37 @@ fn glyph(c: char) -> [u8; 7] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 12, item 1: a profile station at x = -1.7e308 (finite, so a peer could send it)
+    /// made the tick code allocate without bound. Any finite data must plot.
+    #[test]
+    fn regression_any_finite_data_plots() {
+        for points in [
+            vec![[-1.7e308, 0.5], [1.0, 1.0]],
+            vec![[f64::MIN, f64::MIN], [f64::MAX, f64::MAX]],
+            vec![[0.0, 1e-300], [1.0, 1e300]],
+        ] {
+            for log_y in [false, true] {
+                let spec = PlotSpec {
+                    title: "T".into(),
+                    x_label: "X".into(),
+                    y_label: "Y".into(),
+                    log_x: false,
+                    log_y,
+                };
+                let series = [Series {
+                    label: "S".into(),
+                    colour: [0, 0, 0],
+                    markers: true,
+                    points: points.clone(),
+                }];
+                let image = line_plot(&spec, &series);
+                assert_eq!(image.pixels.len(), WIDTH * HEIGHT);
+            }
+        }
+        let (t, (a, b)) = ticks((-1.7e308, 1.0), false);
+        assert!(t.len() <= 101 && a.is_finite() && b.is_finite());
+    }
 
     #[test]
     fn linear_ticks_are_1_2_5_steps_covering_the_range() {
