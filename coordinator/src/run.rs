@@ -274,7 +274,13 @@ pub fn run(
             }
         }
         record_epoch(&search, &migrations, dims, ctx.store)?;
-        diversity.record(search.epoch, search.evaluations, &search.islands)?;
+        diversity.record(
+            search.epoch,
+            search.evaluations,
+            &search.islands,
+            &scene,
+            dims,
+        )?;
 
         let best = best_of(&search.islands);
         writer.best_so_far(best, dims)?;

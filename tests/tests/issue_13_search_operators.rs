@@ -97,7 +97,7 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
     assert_eq!(rows.len(), 3 * one.epochs);
-    let scales: Vec<f64> = rows.iter().map(|r| r[5]).collect();
+    let scales: Vec<f64> = rows.iter().map(|r| r[7]).collect();
     assert!(
         scales.iter().all(|s| (0.25..=2.0).contains(s)),
         "{scales:?}"
@@ -110,7 +110,7 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
         let mine: Vec<f64> = rows
             .iter()
             .filter(|r| r[2] == island as f64)
-            .map(|r| r[5])
+            .map(|r| r[7])
             .collect();
         for w in mine.windows(2) {
             let ratio = w[1] / w[0];
@@ -127,5 +127,16 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     assert!(
         rows.iter()
             .all(|r| r[3].is_finite() && r[3] >= 0.0 && r[4] >= 0.0)
+    );
+    // Design distances are shares of voxels, and the island holding the run's best is at 0.
+    assert!(
+        rows.iter()
+            .all(|r| (0.0..=1.0).contains(&r[5]) && (0.0..=1.0).contains(&r[6]))
+    );
+    let last_epoch = one.epochs as f64;
+    assert!(
+        rows.iter()
+            .filter(|r| r[0] == last_epoch)
+            .any(|r| r[4] == 0.0 && r[6] == 0.0)
     );
 }

@@ -9,7 +9,9 @@ mod migration;
 mod resolution;
 mod variation;
 
-pub use diversity::{DiversityLog, IslandDiversity, mean_pairwise_distance, measure};
+pub use diversity::{
+    DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
+};
 pub use island::{Breeding, Child, Individual, Island};
 pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,
