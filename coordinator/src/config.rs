@@ -9,7 +9,10 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
 use crate::cluster::settings::ClusterSettings;
-use crate::search::{MigrationParams, ResolutionSchedule};
+use crate::search::{
+    CrossoverParams, LocalSearchParams, MigrationParams, ResolutionSchedule, StepAdaptation,
+    Variation,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -69,6 +72,23 @@ pub struct SearchSection {
     pub initial_points: usize,
     pub mutation: MutationParams,
     pub migration: MigrationParams,
+    /// Nudges of each island's best design (off by default).
+    pub local_search: LocalSearchParams,
+    /// Adapting the mutation step to each island's success (fixed by default).
+    pub step_adaptation: StepAdaptation,
+    /// Where crossover cuts (uniformly oriented planes by default, as in the paper).
+    pub crossover: CrossoverParams,
+}
+
+impl SearchSection {
+    /// The variation policies beyond the paper's operators.
+    pub fn variation(&self) -> Variation {
+        Variation {
+            local_search: self.local_search.clone(),
+            step_adaptation: self.step_adaptation.clone(),
+            crossover: self.crossover.clone(),
+        }
+    }
 }
 
 impl Default for SearchSection {
@@ -80,6 +100,9 @@ impl Default for SearchSection {
             initial_points: 40,
             mutation: MutationParams::default(),
             migration: MigrationParams::default(),
+            local_search: LocalSearchParams::default(),
+            step_adaptation: StepAdaptation::default(),
+            crossover: CrossoverParams::default(),
         }
     }
 }
@@ -211,6 +234,7 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     {
         return Err("search.migration.topology.probability must be in [0, 1]".into());
     }
+    s.variation().validate()?;
     let b = &raw.budget;
     if b.evaluations.is_none() && b.wall_seconds.is_none() && b.target_rms_percent.is_none() {
         return Err(
@@ -364,5 +388,24 @@ target = "straight"
             assert!(err.contains(key), "{to}: {err}");
             assert!(!err.contains('\n'), "{err}");
         }
+    }
+
+    #[test]
+    fn the_search_variation_keys_default_off_and_a_bad_one_is_named() {
+        let c = RunConfig::parse(MINIMAL, Path::new("t.toml")).unwrap();
+        assert_eq!(
+            c.raw.search.variation(),
+            crate::search::Variation::default()
+        );
+        assert_eq!(c.raw.search.local_search.fraction, 0.0);
+        assert!(c.raw.search.migration.only_if_fitter);
+        let text = MINIMAL.replace(
+            "[budget]",
+            "[search.local_search]\nfraction = 2.0\n[budget]",
+        );
+        let err = RunConfig::parse(&text, Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("search.local_search.fraction"), "{err}");
     }
 }

@@ -18,7 +18,7 @@ use crate::evaluator::{Completion, Evaluator, EvaluatorError, Task};
 use crate::ids::{IslandId, TaskId};
 use crate::progress::Progress;
 use crate::results::ResultWriter;
-use crate::search::{Breeding, Individual, Island, ResolutionState, migrate};
+use crate::search::{Breeding, DiversityLog, Individual, Island, ResolutionState, migrate};
 use crate::store::{
     EpochRecord, EvaluationRecord, MigrationRecord, Purpose, RunStore, StoreError, StoredEvaluation,
 };
@@ -90,9 +90,11 @@ pub fn run(
         mutation: raw.search.mutation.clone(),
         limits: scene.limits().clone(),
         material_count: scene.palette().len(),
+        variation: raw.search.variation(),
     };
     let schedule = &raw.resolution;
     let mut writer = ResultWriter::create(config)?;
+    let mut diversity = DiversityLog::create(writer.dir())?;
     let mut history = Vec::new();
 
     // Island i draws from stream i + 1 of the run seed; stream 0 drives migration.
@@ -223,6 +225,13 @@ pub fn run(
             }
         }
         record_epoch(&search, &migrations, dims, ctx.store)?;
+        diversity.record(
+            search.epoch,
+            search.evaluations,
+            &search.islands,
+            &scene,
+            dims,
+        )?;
 
         let best = best_of(&search.islands);
         writer.best_so_far(best, dims)?;

@@ -13,7 +13,8 @@ fn custom(points: &[[f64; 2]], interpolation: Interpolation) -> CustomProfile {
 fn pchip_agrees_with_scipy() {
     // Values of scipy.interpolate.PchipInterpolator (SciPy 1.16), an independent implementation
     // of the same Fritsch–Carlson scheme, at the same points.
-    let cases: [(&[[f64; 2]], &[(f64, f64)]); 2] = [
+    type Case<'a> = (&'a [[f64; 2]], &'a [(f64, f64)]);
+    let cases: [Case; 2] = [
         (
             &[[0.0, 0.0], [0.3, 0.05], [0.7, 0.6], [1.0, 1.0]],
             &[

@@ -46,6 +46,8 @@ children_per_epoch = 24
 initial_points = 40
 [search.migration]
 interval = 3
+[search.local_search]
+fraction = 0.25
 [budget]
 evaluations = 6000
 [resolution]
@@ -77,7 +79,9 @@ fn layout(dims: GridDims, hard: impl Fn(usize, usize, usize) -> bool) -> VoxelGr
 fn an_evolved_stiff_design_beats_a_top_slab_and_a_random_layout_of_its_budget() {
     let config = stiffness_config(&scratch_dir("stiffness-run"));
     let summary = run_locally(&config, 2);
-    let Scene::Stiffness(scene) = &config.raw.scene else { panic!() };
+    let Scene::Stiffness(scene) = &config.raw.scene else {
+        panic!()
+    };
     let best = summary.best();
     let Some(Metrics::Stiffness(evolved)) = best.outcome.metrics() else {
         panic!("no design evaluated: {:?}", best.outcome)
@@ -93,7 +97,9 @@ fn an_evolved_stiff_design_beats_a_top_slab_and_a_random_layout_of_its_budget() 
     let slab = stiffness(&layout(dims, |x, _, z| z == 4 || (z == 3 && x < 2)));
     assert!(slab.within_budget, "{slab:?}");
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let picks: Vec<bool> = (0..dims.cell_count()).map(|_| rng.random::<f64>() < 0.3).collect();
+    let picks: Vec<bool> = (0..dims.cell_count())
+        .map(|_| rng.random::<f64>() < 0.3)
+        .collect();
     let random = stiffness(&layout(dims, |x, y, z| picks[dims.index(x, y, z)]));
     eprintln!(
         "evolved {:.4} ({:.3} hard, flange efficiency {:.3}), top slab {:.4}, random {:.4} ({:.3} hard)",

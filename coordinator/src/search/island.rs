@@ -5,13 +5,14 @@
 //! fitness. The result depends only on the island's RNG stream, never on who evaluated what when.
 
 use amorph::genome::{
-    CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate,
+    CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate, perturb,
     random_genome,
 };
 use amorph::task::Outcome;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
+use super::variation::Variation;
 use crate::ids::{IslandId, TaskId};
 
 /// A member of a population and how it scored.
@@ -29,6 +30,8 @@ pub struct Child {
     pub genome: Genome,
     pub dominant_parent: usize,
     pub parents: [usize; 2],
+    /// A nudge of the island's best (local search) rather than a crossover child.
+    pub nudge: bool,
 }
 
 /// How an island breeds (shared by all islands of a run).
@@ -37,6 +40,8 @@ pub struct Breeding {
     pub mutation: MutationParams,
     pub limits: GenomeLimits,
     pub material_count: usize,
+    /// Policies beyond the paper's operators (all off by default).
+    pub variation: Variation,
 }
 
 #[derive(Debug)]
@@ -44,6 +49,12 @@ pub struct Island {
     pub id: IslandId,
     pub population: Vec<Individual>,
     rng: ChaCha8Rng,
+    /// The mutation step of the next epoch as a multiple of `search.mutation.step` (1 unless the
+    /// step adapts).
+    step_scale: f64,
+    /// Crossover children of the last epoch that replaced their dominant parent, and how many
+    /// there were: the evidence the step adapts to.
+    last_success: (usize, usize),
 }
 
 impl Island {
@@ -65,48 +76,97 @@ impl Island {
             id,
             population,
             rng,
+            step_scale: 1.0,
+            last_success: (0, 0),
         }
     }
 
-    /// Breeds `count` children from the current snapshot: two distinct random parents, a random
-    /// cut plane, the dominant parent, then mutation.
+    /// The mutation step of the coming epoch as a multiple of the configured one.
+    pub fn step_scale(&self) -> f64 {
+        self.step_scale
+    }
+
+    /// Breeds `count` children from the current snapshot: two distinct random parents, a cut
+    /// plane, the dominant parent, then mutation; the last few are nudges of the best when a local
+    /// search is configured. The mutation step first adapts to the last epoch's success.
     pub fn breed(&mut self, count: usize, breeding: &Breeding) -> Vec<Child> {
+        let (replaced, tried) = self.last_success;
+        self.step_scale =
+            breeding
+                .variation
+                .step_adaptation
+                .next_scale(self.step_scale, replaced, tried);
+        self.last_success = (0, 0);
+        let mutation = MutationParams {
+            step: breeding.mutation.step * self.step_scale,
+            ..breeding.mutation.clone()
+        };
+        let nudges = breeding.variation.local_search.nudges(count);
+        let mut children: Vec<Child> = (0..count - nudges)
+            .map(|_| self.crossover_child(breeding, &mutation))
+            .collect();
+        let best = self.best_index();
+        let local = &breeding.variation.local_search;
+        for _ in 0..nudges {
+            let mut genome = self.population[best].genome.clone();
+            perturb(
+                &mut genome,
+                &mut self.rng,
+                local.probability,
+                local.step,
+                &breeding.limits,
+            );
+            children.push(Child {
+                genome,
+                dominant_parent: best,
+                parents: [best, best],
+                nudge: true,
+            });
+        }
+        children
+    }
+
+    fn crossover_child(&mut self, breeding: &Breeding, mutation: &MutationParams) -> Child {
         let n = self.population.len();
-        (0..count)
-            .map(|_| {
-                let a = self.rng.random_range(0..n);
-                let b = if n > 1 {
-                    let b = self.rng.random_range(0..n - 1);
-                    if b >= a { b + 1 } else { b }
-                } else {
-                    a
-                };
-                let plane = CutPlane::random(&mut self.rng);
-                let cross = crossover(
-                    &self.population[a].genome,
-                    &self.population[b].genome,
-                    &plane,
-                    breeding.limits.max_points,
-                );
-                let mut genome = cross.child;
-                mutate(
-                    &mut genome,
-                    &mut self.rng,
-                    &breeding.mutation,
-                    &breeding.limits,
-                    breeding.material_count,
-                );
-                let dominant_parent = match cross.dominant {
-                    DominantParent::A => a,
-                    DominantParent::B => b,
-                };
-                Child {
-                    genome,
-                    dominant_parent,
-                    parents: [a, b],
-                }
-            })
-            .collect()
+        let a = self.rng.random_range(0..n);
+        let b = if n > 1 {
+            let b = self.rng.random_range(0..n - 1);
+            if b >= a { b + 1 } else { b }
+        } else {
+            a
+        };
+        let across = &breeding.variation.crossover;
+        // The draw is skipped when the option is off, so the paper's search keeps its RNG stream.
+        let plane =
+            if across.across_probability > 0.0 && self.rng.random_bool(across.across_probability) {
+                CutPlane::across(&mut self.rng, across.axis)
+            } else {
+                CutPlane::random(&mut self.rng)
+            };
+        let cross = crossover(
+            &self.population[a].genome,
+            &self.population[b].genome,
+            &plane,
+            breeding.limits.max_points,
+        );
+        let mut genome = cross.child;
+        mutate(
+            &mut genome,
+            &mut self.rng,
+            mutation,
+            &breeding.limits,
+            breeding.material_count,
+        );
+        let dominant_parent = match cross.dominant {
+            DominantParent::A => a,
+            DominantParent::B => b,
+        };
+        Child {
+            genome,
+            dominant_parent,
+            parents: [a, b],
+            nudge: false,
+        }
     }
 
     /// Applies an epoch's evaluated children in order: each replaces its dominant parent only if
@@ -116,7 +176,12 @@ impl Island {
         let mut replaced = 0;
         for (child, (task, outcome)) in children.into_iter().zip(outcomes) {
             let slot = &mut self.population[child.dominant_parent];
-            if outcome.is_fitter_than(&slot.outcome) {
+            let wins = outcome.is_fitter_than(&slot.outcome);
+            if !child.nudge {
+                self.last_success.1 += 1;
+                self.last_success.0 += usize::from(wins);
+            }
+            if wins {
                 *slot = Individual {
                     genome: child.genome,
                     outcome,
@@ -156,5 +221,137 @@ impl Island {
 
     pub fn rng_mut(&mut self) -> &mut ChaCha8Rng {
         &mut self.rng
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::fixtures::{failed, island, point_at, scored};
+    use crate::search::variation::LocalSearchParams;
+
+    fn child(dominant_parent: usize, x: f64) -> Child {
+        Child {
+            genome: point_at(x),
+            dominant_parent,
+            parents: [dominant_parent, dominant_parent],
+            nudge: false,
+        }
+    }
+
+    #[test]
+    fn a_child_replaces_its_dominant_parent_only_if_strictly_fitter() {
+        let mut isl = island(0, &[0.1, 0.2, 0.3], &[-5.0, -3.0, -1.0]);
+        let replaced = isl.apply(
+            vec![child(0, 0.9), child(1, 0.8), child(2, 0.7)],
+            vec![
+                (TaskId(1), scored(-5.0)), // equal: stays
+                (TaskId(2), scored(-2.0)), // fitter than -3: replaces
+                (TaskId(3), scored(-4.0)), // fitter than slot 0, but slot 2 is its parent: stays
+            ],
+        );
+        assert_eq!(replaced, 1);
+        let tasks: Vec<u64> = isl.population.iter().map(|i| i.task.0).collect();
+        assert_eq!(tasks, vec![0, 2, 2]);
+        assert_eq!(isl.population[1].genome, point_at(0.8));
+    }
+
+    #[test]
+    fn children_meet_the_current_occupant_in_child_order() {
+        // Both children descend from slot 0 (fitness -5). The first (-4) replaces it; the second
+        // (-4.5) beats the original parent but not the new occupant, so it stays out.
+        let mut isl = island(0, &[0.1], &[-5.0]);
+        let outcomes = vec![(TaskId(1), scored(-4.0)), (TaskId(2), scored(-4.5))];
+        assert_eq!(isl.apply(vec![child(0, 0.5), child(0, 0.6)], outcomes), 1);
+        assert_eq!(isl.population[0].task, TaskId(1));
+        // In the other order both replace, one after the other.
+        let mut isl = island(0, &[0.1], &[-5.0]);
+        let outcomes = vec![(TaskId(2), scored(-4.5)), (TaskId(1), scored(-4.0))];
+        assert_eq!(isl.apply(vec![child(0, 0.6), child(0, 0.5)], outcomes), 2);
+        assert_eq!(isl.population[0].task, TaskId(1));
+    }
+
+    #[test]
+    fn a_failed_child_never_replaces_and_any_evaluated_child_replaces_a_failed_parent() {
+        let mut isl = island(0, &[0.1, 0.2], &[-5.0, -3.0]);
+        isl.population[1].outcome = failed();
+        let replaced = isl.apply(
+            vec![child(0, 0.9), child(1, 0.8)],
+            vec![(TaskId(1), failed()), (TaskId(2), scored(-1e9))],
+        );
+        assert_eq!(replaced, 1);
+        assert_eq!(isl.population[0].task, TaskId(0));
+        assert_eq!(isl.population[1].task, TaskId(2));
+    }
+
+    fn breeding(variation: Variation) -> Breeding {
+        Breeding {
+            mutation: MutationParams::default(),
+            limits: GenomeLimits::default(),
+            material_count: 2,
+            variation,
+        }
+    }
+
+    #[test]
+    fn nudges_are_the_best_with_only_continuous_parameters_moved() {
+        let mut isl = island(0, &[0.1, 0.2, 0.3, 0.4], &[-5.0, -1.0, -3.0, -4.0]);
+        let mut best = random_genome(isl.rng_mut(), 30, &GenomeLimits::default(), 2);
+        best.points[0].material = amorph::material::MaterialId(1);
+        isl.population[1].genome = best.clone();
+        let b = breeding(Variation {
+            local_search: LocalSearchParams {
+                fraction: 0.5,
+                probability: 1.0,
+                step: 0.01,
+            },
+            ..Default::default()
+        });
+        let children = isl.breed(6, &b);
+        assert_eq!(children.iter().filter(|c| c.nudge).count(), 3);
+        assert!(children[..3].iter().all(|c| !c.nudge), "nudges come last");
+        for c in &children[3..] {
+            assert_eq!((c.dominant_parent, c.parents), (1, [1, 1]));
+            assert_eq!(c.genome.len(), best.len());
+            for (p, q) in c.genome.points.iter().zip(&best.points) {
+                assert_eq!(p.material, q.material);
+                assert_ne!(
+                    p.position, q.position,
+                    "probability 1 moves every coordinate"
+                );
+            }
+            c.genome.validate(&b.limits, 2).expect("within limits");
+        }
+    }
+
+    #[test]
+    fn the_step_adapts_to_crossover_children_only() {
+        use crate::search::variation::{StepAdaptation, StepRule};
+        let mut isl = island(0, &[0.1, 0.2], &[-5.0, -3.0]);
+        let b = breeding(Variation {
+            step_adaptation: StepAdaptation {
+                rule: StepRule::OneFifth,
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        // 1 of 2 crossover children succeeds (50 % > 1/5); a successful nudge does not count.
+        let mut nudge = child(1, 0.3);
+        nudge.nudge = true;
+        isl.apply(
+            vec![child(0, 0.9), child(1, 0.8), nudge],
+            vec![
+                (TaskId(1), scored(-4.0)),
+                (TaskId(2), scored(-9.0)),
+                (TaskId(3), scored(-0.5)),
+            ],
+        );
+        isl.breed(1, &b);
+        assert_eq!(isl.step_scale(), 1.2);
+        // Then an epoch with only failures shrinks it back.
+        let children = vec![child(0, 0.1)];
+        isl.apply(children, vec![(TaskId(4), failed())]);
+        isl.breed(1, &b);
+        assert_eq!(isl.step_scale(), 1.0);
     }
 }

@@ -1,13 +1,21 @@
 //! The evolutionary search: deterministic-crowding islands bred in epochs, migration between them,
 //! and the multi-resolution schedule.
 
+mod diversity;
+#[cfg(test)]
+mod fixtures;
 mod island;
 mod migration;
 mod resolution;
+mod variation;
 
+pub use diversity::{
+    DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
+};
 pub use island::{Breeding, Child, Individual, Island};
 pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,
     genome_distance, migrate,
 };
 pub use resolution::{ResolutionSchedule, ResolutionState};
+pub use variation::{CrossoverParams, LocalSearchParams, StepAdaptation, StepRule, Variation};

@@ -5,7 +5,7 @@ mod operators;
 mod point;
 
 pub use operators::{
-    Crossover, CutPlane, DominantParent, MutationParams, crossover, mutate, random_genome,
+    Crossover, CutPlane, DominantParent, MutationParams, crossover, mutate, perturb, random_genome,
     random_point,
 };
 pub use point::{GaussianPoint, Genome, GenomeError, GenomeLimits};

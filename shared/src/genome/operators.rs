@@ -128,6 +128,36 @@ pub fn mutate<R: Rng + ?Sized>(
     }
 }
 
+/// Moves a genome's continuous parameters (position, density, falloff) by small Gaussian steps,
+/// each parameter with probability `probability` and a standard deviation of `step` times its
+/// range, clamped to the range. Materials and the number of points stay as they are: this is the
+/// refinement move of a local search around a good design, not an exploration move.
+pub fn perturb<R: Rng + ?Sized>(
+    genome: &mut Genome,
+    rng: &mut R,
+    probability: f64,
+    step: f64,
+    limits: &GenomeLimits,
+) {
+    let nudge = |rng: &mut R, value: f64, [lo, hi]: [f64; 2]| {
+        let z: f64 = StandardNormal.sample(rng);
+        (value + z * step * (hi - lo)).clamp(lo, hi)
+    };
+    for p in &mut genome.points {
+        for axis in 0..3 {
+            if rng.random_bool(probability) {
+                p.position[axis] = nudge(rng, p.position[axis], [0.0, 1.0]);
+            }
+        }
+        if rng.random_bool(probability) {
+            p.density = nudge(rng, p.density, limits.density);
+        }
+        if rng.random_bool(probability) {
+            p.falloff = nudge(rng, p.falloff, limits.falloff);
+        }
+    }
+}
+
 /// Which parent gave a crossover child more of its points.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum DominantParent {
@@ -171,6 +201,16 @@ impl CutPlane {
         }
     }
 
+    /// A plane across one axis: origin uniform in the workspace, normal along `axis` with a random
+    /// sign. Across the beam's length (y) it gives a child one parent's root and the other's tip,
+    /// the split a profile along the beam is made of.
+    pub fn across<R: Rng + ?Sized>(rng: &mut R, axis: usize) -> Self {
+        let origin = [rng.random(), rng.random(), rng.random()];
+        let mut normal = [0.0; 3];
+        normal[axis] = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        Self { origin, normal }
+    }
+
     /// True on the side the normal points to (points on the plane count as this side).
     pub fn is_front(&self, p: [f64; 3]) -> bool {
         let d: f64 = (0..3)
@@ -199,5 +239,100 @@ pub fn crossover(a: &Genome, b: &Genome, plane: &CutPlane, max_points: usize) ->
             DominantParent::B
         },
         from_parents: (n_a, n_b),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// 4,000 points in the middle of every range, so steps of 1 % of a range are never clamped.
+    fn centred(count: usize, limits: &GenomeLimits) -> Genome {
+        let mid = |[lo, hi]: [f64; 2]| 0.5 * (lo + hi);
+        Genome::new(vec![
+            GaussianPoint {
+                position: [0.5; 3],
+                density: mid(limits.density),
+                falloff: mid(limits.falloff),
+                material: MaterialId(1),
+            };
+            count
+        ])
+    }
+
+    #[test]
+    fn perturb_moves_each_parameter_by_the_documented_gaussian() {
+        let limits = GenomeLimits::default();
+        let (n, probability, step) = (4000, 0.3, 0.01);
+        let before = centred(n, &limits);
+        let mut after = before.clone();
+        perturb(
+            &mut after,
+            &mut ChaCha8Rng::seed_from_u64(3),
+            probability,
+            step,
+            &limits,
+        );
+        let moves = |f: &dyn Fn(&GaussianPoint) -> f64, range: f64| -> (f64, f64) {
+            let d: Vec<f64> = after
+                .points
+                .iter()
+                .zip(&before.points)
+                .map(|(a, b)| (f(a) - f(b)) / range)
+                .filter(|d| *d != 0.0)
+                .collect();
+            let share = d.len() as f64 / n as f64;
+            let sd = (d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64).sqrt();
+            (share, sd)
+        };
+        let span = |[lo, hi]: [f64; 2]| hi - lo;
+        for (name, (share, sd)) in [
+            ("y", moves(&|p| p.position[1], 1.0)),
+            ("density", moves(&|p| p.density, span(limits.density))),
+            ("falloff", moves(&|p| p.falloff, span(limits.falloff))),
+        ] {
+            // Binomial share: sd sqrt(0.3 * 0.7 / 4000) = 0.0072, so 0.03 is four sigma. The
+            // sample sd of ~1,200 normal steps is within 2 % of sigma at one sigma; 8 % is four.
+            assert!((share - probability).abs() < 0.03, "{name}: share {share}");
+            assert!((sd / step - 1.0).abs() < 0.08, "{name}: sd {sd}");
+        }
+        assert!(after.points.iter().all(|p| p.material == MaterialId(1)));
+        assert_eq!(after.len(), n);
+    }
+
+    #[test]
+    fn perturb_clamps_to_the_ranges() {
+        let limits = GenomeLimits::default();
+        let mut g = centred(500, &limits);
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        for _ in 0..20 {
+            perturb(&mut g, &mut rng, 1.0, 0.5, &limits);
+        }
+        g.validate(&limits, 2)
+            .expect("every parameter stays in range");
+        let at_edge = g.points.iter().filter(|p| p.density == limits.density[1]);
+        assert!(
+            at_edge.count() > 0,
+            "steps of half a range do reach the edges"
+        );
+    }
+
+    #[test]
+    fn a_plane_across_an_axis_has_that_axis_as_its_normal() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut signs = [0, 0];
+        for _ in 0..100 {
+            let plane = CutPlane::across(&mut rng, 1);
+            assert_eq!(plane.normal[0], 0.0);
+            assert_eq!(plane.normal[2], 0.0);
+            assert_eq!(plane.normal[1].abs(), 1.0);
+            signs[usize::from(plane.normal[1] > 0.0)] += 1;
+            // Which side a point is on depends on y alone.
+            let y = plane.origin[1] + 0.01 * plane.normal[1];
+            assert!(plane.is_front([0.0, y, 1.0]) && plane.is_front([1.0, y, 0.0]));
+        }
+        assert!(signs[0] > 20 && signs[1] > 20, "both signs: {signs:?}");
     }
 }

@@ -1,0 +1,238 @@
+//! Variation policies beyond the paper's operators, each off by default so a config that does not
+//! name them breeds exactly as the paper does: a local search around each island's best design,
+//! a mutation step that adapts to each island's success (the 1/5th rule), and crossover planes
+//! across the beam.
+//!
+//! None of them puts state into the genome, which goes over the wire as points only: the adapted
+//! step lives in the island and is a function of the replacements so far, so a resumed run that
+//! replays the same outcomes rebuilds it bit for bit.
+
+use serde::{Deserialize, Serialize};
+
+/// A (1+λ) evolution strategy inside crowding: some children of every epoch are the island's best
+/// design with its continuous parameters nudged (no crossover, no material change, no point added
+/// or removed). Their dominant parent is the best's slot, so crowding keeps a nudge only if it is
+/// fitter than the best.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LocalSearchParams {
+    /// Share of each epoch's children that are nudges of the best (0: off, the paper's search).
+    pub fraction: f64,
+    /// Probability that each continuous parameter of each point is nudged.
+    pub probability: f64,
+    /// Standard deviation of a nudge, as a fraction of the parameter's range (a tenth of the
+    /// default mutation step: a few hundredths of a voxel along the beam at 12x40x12).
+    pub step: f64,
+}
+
+impl Default for LocalSearchParams {
+    fn default() -> Self {
+        Self {
+            fraction: 0.0,
+            probability: 0.2,
+            step: 0.005,
+        }
+    }
+}
+
+impl LocalSearchParams {
+    /// How many of `count` children are nudges of the best (the rest are bred as in the paper).
+    pub fn nudges(&self, count: usize) -> usize {
+        ((self.fraction * count as f64).round() as usize).min(count)
+    }
+}
+
+/// How an island's mutation step changes from epoch to epoch.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StepRule {
+    /// The configured step throughout (the paper).
+    #[default]
+    Fixed,
+    /// Rechenberg's 1/5th success rule: after an epoch in which more than a fifth of the children
+    /// replaced their dominant parent the step grows by `factor`, after one with fewer it shrinks
+    /// by it, within [`StepAdaptation::min_scale`, `StepAdaptation::max_scale`].
+    OneFifth,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StepAdaptation {
+    pub rule: StepRule,
+    /// Growth or shrinkage of the step per epoch (> 1).
+    pub factor: f64,
+    /// Bounds on the step as a multiple of `search.mutation.step`.
+    pub min_scale: f64,
+    pub max_scale: f64,
+}
+
+impl Default for StepAdaptation {
+    fn default() -> Self {
+        Self {
+            rule: StepRule::Fixed,
+            factor: 1.2,
+            min_scale: 0.1,
+            max_scale: 4.0,
+        }
+    }
+}
+
+/// The success rate that separates growing from shrinking under the 1/5th rule.
+const ONE_FIFTH: f64 = 0.2;
+
+impl StepAdaptation {
+    /// The next epoch's scale of the mutation step, given this epoch's scale and how many of its
+    /// `tried` children replaced their dominant parent. An epoch without children keeps the scale.
+    pub fn next_scale(&self, scale: f64, replaced: usize, tried: usize) -> f64 {
+        if self.rule == StepRule::Fixed || tried == 0 {
+            return scale;
+        }
+        let rate = replaced as f64 / tried as f64;
+        let next = if rate > ONE_FIFTH {
+            scale * self.factor
+        } else if rate < ONE_FIFTH {
+            scale / self.factor
+        } else {
+            scale
+        };
+        next.clamp(self.min_scale, self.max_scale)
+    }
+}
+
+/// Where crossover cuts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CrossoverParams {
+    /// Probability that a cut plane is across `axis` instead of uniformly oriented (0: the paper).
+    pub across_probability: f64,
+    /// The axis such planes cut across (0 = x, 1 = y, the beam's length, 2 = z).
+    pub axis: usize,
+}
+
+impl Default for CrossoverParams {
+    fn default() -> Self {
+        Self {
+            across_probability: 0.0,
+            axis: 1,
+        }
+    }
+}
+
+/// The variation policies of a run (`[search.local_search]`, `[search.step_adaptation]`,
+/// `[search.crossover]`), checked before a run starts.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Variation {
+    pub local_search: LocalSearchParams,
+    pub step_adaptation: StepAdaptation,
+    pub crossover: CrossoverParams,
+}
+
+impl Variation {
+    /// Checks every field, naming the first bad one as its config key.
+    pub fn validate(&self) -> Result<(), String> {
+        let unit = |v: f64| (0.0..=1.0).contains(&v);
+        let l = &self.local_search;
+        if !unit(l.fraction) {
+            return Err("search.local_search.fraction must be in [0, 1]".into());
+        }
+        if !unit(l.probability) {
+            return Err("search.local_search.probability must be in [0, 1]".into());
+        }
+        if !(l.step.is_finite() && l.step > 0.0) {
+            return Err("search.local_search.step must be a positive number".into());
+        }
+        let a = &self.step_adaptation;
+        if !(a.factor.is_finite() && a.factor > 1.0) {
+            return Err("search.step_adaptation.factor must be a number above 1".into());
+        }
+        if !(a.min_scale.is_finite() && a.min_scale > 0.0 && a.min_scale <= 1.0) {
+            return Err("search.step_adaptation.min_scale must be in (0, 1]".into());
+        }
+        if !(a.max_scale.is_finite() && a.max_scale >= 1.0) {
+            return Err("search.step_adaptation.max_scale must be at least 1".into());
+        }
+        let c = &self.crossover;
+        if !unit(c.across_probability) {
+            return Err("search.crossover.across_probability must be in [0, 1]".into());
+        }
+        if c.axis > 2 {
+            return Err("search.crossover.axis must be 0 (x), 1 (y) or 2 (z)".into());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_fifth() -> StepAdaptation {
+        StepAdaptation {
+            rule: StepRule::OneFifth,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn the_fixed_rule_never_changes_the_step() {
+        let fixed = StepAdaptation::default();
+        assert_eq!(fixed.next_scale(1.0, 50, 50), 1.0);
+        assert_eq!(fixed.next_scale(1.0, 0, 50), 1.0);
+    }
+
+    #[test]
+    fn one_fifth_grows_above_a_fifth_shrinks_below_and_holds_at_it() {
+        let a = one_fifth();
+        assert_eq!(a.next_scale(1.0, 11, 50), 1.2);
+        assert_eq!(a.next_scale(1.0, 9, 50), 1.0 / 1.2);
+        assert_eq!(a.next_scale(1.0, 10, 50), 1.0);
+        assert_eq!(a.next_scale(0.7, 0, 0), 0.7, "no children, no evidence");
+    }
+
+    #[test]
+    fn one_fifth_stays_within_its_bounds() {
+        let a = one_fifth();
+        let mut s = 1.0;
+        for _ in 0..100 {
+            s = a.next_scale(s, 0, 50);
+        }
+        assert_eq!(s, a.min_scale);
+        for _ in 0..100 {
+            s = a.next_scale(s, 50, 50);
+        }
+        assert_eq!(s, a.max_scale);
+    }
+
+    #[test]
+    fn nudges_round_to_the_nearest_child() {
+        let l = LocalSearchParams {
+            fraction: 0.2,
+            ..Default::default()
+        };
+        assert_eq!(l.nudges(50), 10);
+        assert_eq!(l.nudges(3), 1);
+        assert_eq!(LocalSearchParams::default().nudges(50), 0);
+    }
+
+    #[test]
+    fn each_bad_field_is_named() {
+        let mut v = Variation::default();
+        assert!(v.validate().is_ok());
+        v.crossover.axis = 3;
+        assert!(v.validate().unwrap_err().contains("search.crossover.axis"));
+        v = Variation::default();
+        v.step_adaptation.factor = 1.0;
+        assert!(
+            v.validate()
+                .unwrap_err()
+                .contains("search.step_adaptation.factor")
+        );
+        v = Variation::default();
+        v.local_search.fraction = f64::NAN;
+        assert!(
+            v.validate()
+                .unwrap_err()
+                .contains("search.local_search.fraction")
+        );
+    }
+}

@@ -1,0 +1,142 @@
+//! Issue 13: the search's new operators (nudges of the best, the 1/5th-rule step, crossover planes
+//! across the beam, migration into the most similar slot) keep a run bit-identical whatever the
+//! number of evaluation threads, keep the adapted step within its bounds, and never lose an
+//! island's best; `diversity.csv` records every island after every epoch.
+
+use amorph::genome::Genome;
+use amorph_coordinator::RunConfig;
+use amorph_tests::{run_locally, scratch_dir};
+use std::path::Path;
+
+fn config(results_dir: &Path, seed: u64) -> RunConfig {
+    let text = format!(
+        r#"
+name = "operators"
+seed = {seed}
+results_dir = "{dir}"
+[search]
+population = 10
+islands = 3
+children_per_epoch = 10
+initial_points = 20
+[search.migration]
+interval = 2
+topology = {{ kind = "ring" }}
+replacement = "most_similar"
+[search.local_search]
+fraction = 0.3
+step = 0.02
+[search.step_adaptation]
+rule = "one_fifth"
+factor = 1.5
+min_scale = 0.25
+max_scale = 2.0
+[search.crossover]
+across_probability = 0.5
+[budget]
+evaluations = 240
+[resolution]
+levels = [[4, 12, 4]]
+[cluster]
+local_workers = 0
+[scene]
+kind = "beam"
+target = "circular_arc"
+"#,
+        dir = results_dir.display()
+    );
+    RunConfig::parse(&text, Path::new("operators.toml")).expect("valid test config")
+}
+
+#[test]
+fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
+    let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];
+    let configs = dirs.each_ref().map(|d| config(d, 5));
+    let one = run_locally(&configs[0], 1);
+    let three = run_locally(&configs[1], 3);
+    assert_eq!(one.evaluations, 240);
+    assert_eq!(one.populations, three.populations);
+
+    let limits = configs[0].raw.scene.limits().clone();
+    let materials = configs[0].raw.scene.palette().len();
+    for ind in one.populations.iter().flatten() {
+        let genome: &Genome = &ind.genome;
+        genome.validate(&limits, materials).expect("within limits");
+    }
+
+    // The history's per-island best never gets worse: nudges and migrants enter only by beating
+    // the occupant they replace.
+    let history = std::fs::read_to_string(configs[0].run_dir().join("history.csv")).unwrap();
+    for island in 0..3 {
+        // An island whose members have all failed so far has no best fitness (an empty cell);
+        // once it has one it keeps one.
+        let best: Vec<Option<f64>> = history
+            .lines()
+            .skip(1)
+            .filter(|l| l.split(',').nth(4) == Some(&island.to_string()))
+            .map(|l| l.split(',').nth(5).and_then(|v| v.parse().ok()))
+            .collect();
+        assert_eq!(best.len(), one.epochs, "island {island}");
+        assert!(best.last().is_some_and(|b| b.is_some()), "{best:?}");
+        assert!(
+            best.windows(2).all(|w| match (w[0], w[1]) {
+                (Some(a), Some(b)) => b >= a,
+                (Some(_), None) => false,
+                (None, _) => true,
+            }),
+            "{best:?}"
+        );
+    }
+
+    // diversity.csv: a row per island per epoch; the step scale moves only by the factor and
+    // within its bounds; within-island distances are finite and non-negative.
+    let text = std::fs::read_to_string(configs[0].run_dir().join("diversity.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * one.epochs);
+    let scales: Vec<f64> = rows.iter().map(|r| r[7]).collect();
+    assert!(
+        scales.iter().all(|s| (0.25..=2.0).contains(s)),
+        "{scales:?}"
+    );
+    assert!(
+        scales.iter().any(|&s| s != 1.0),
+        "the step adapted at least once: {scales:?}"
+    );
+    for island in 0..3 {
+        let mine: Vec<f64> = rows
+            .iter()
+            .filter(|r| r[2] == island as f64)
+            .map(|r| r[7])
+            .collect();
+        for w in mine.windows(2) {
+            let ratio = w[1] / w[0];
+            let allowed = [1.0, 1.5, 1.0 / 1.5];
+            let clamped = w[1] == 0.25 || w[1] == 2.0;
+            assert!(
+                clamped || allowed.iter().any(|a| (ratio - a).abs() < 1e-12),
+                "island {island}: {} -> {}",
+                w[0],
+                w[1]
+            );
+        }
+    }
+    assert!(
+        rows.iter()
+            .all(|r| r[3].is_finite() && r[3] >= 0.0 && r[4] >= 0.0)
+    );
+    // Design distances are shares of voxels, and the island holding the run's best is at 0.
+    assert!(
+        rows.iter()
+            .all(|r| (0.0..=1.0).contains(&r[5]) && (0.0..=1.0).contains(&r[6]))
+    );
+    let last_epoch = one.epochs as f64;
+    assert!(
+        rows.iter()
+            .filter(|r| r[0] == last_epoch)
+            .any(|r| r[4] == 0.0 && r[6] == 0.0)
+    );
+}
