@@ -418,11 +418,6 @@ impl Simulation {
         self.dt
     }
 
-    /// Overrides the automatic time step (s), e.g. for convergence studies.
-    pub fn set_dt(&mut self, dt: f64) {
-        self.dt = dt;
-    }
-
     pub fn time(&self) -> f64 {
         self.time
     }

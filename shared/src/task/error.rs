@@ -49,3 +49,36 @@ pub fn finite(field: &str, value: f64) -> Result<(), SceneError> {
         ))
     }
 }
+
+/// Checks a scene's palette and genome limits, naming the one at fault.
+pub fn palette_and_limits(
+    palette: &crate::material::Palette,
+    limits: &crate::genome::GenomeLimits,
+) -> Result<(), SceneError> {
+    palette
+        .validate()
+        .map_err(|e| SceneError::new("palette", e.to_string()))?;
+    limits
+        .validate()
+        .map_err(|e| SceneError::new("limits", e.to_string()))
+}
+
+/// Checks a peer's voxel counts against the grid: 1 to `dims.cell_count()` voxels, one count per
+/// palette material, adding up to the total.
+pub fn counts_fit(
+    voxels: usize,
+    material_counts: &[usize],
+    materials: usize,
+    dims: crate::voxel::GridDims,
+) -> Result<(), String> {
+    let cells = dims.cell_count();
+    if voxels == 0 || voxels > cells {
+        return Err(format!("voxels = {voxels} outside 1..={cells}"));
+    }
+    if material_counts.len() != materials || material_counts.iter().sum::<usize>() != voxels {
+        return Err(format!(
+            "material_counts {material_counts:?} do not add up to voxels = {voxels} over {materials} materials"
+        ));
+    }
+    Ok(())
+}

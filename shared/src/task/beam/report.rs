@@ -6,6 +6,7 @@ use std::path::Path;
 use super::scene::{BeamMetrics, BeamScene};
 use crate::export::{Block, PlotSpec, Series, line_plot};
 use crate::task::Artefact;
+use crate::task::error::counts_fit;
 use crate::voxel::GridDims;
 
 fn percent(v: Option<f64>) -> String {
@@ -101,20 +102,7 @@ pub(super) fn check_metrics(
     m: &BeamMetrics,
     dims: GridDims,
 ) -> Result<(), String> {
-    let cells = dims.cell_count();
-    if m.voxels == 0 || m.voxels > cells {
-        return Err(format!("voxels = {} outside 1..={cells}", m.voxels));
-    }
-    if m.material_counts.len() != scene.palette.len()
-        || m.material_counts.iter().sum::<usize>() != m.voxels
-    {
-        return Err(format!(
-            "material_counts {:?} do not add up to voxels = {} over {} materials",
-            m.material_counts,
-            m.voxels,
-            scene.palette.len()
-        ));
-    }
+    counts_fit(m.voxels, &m.material_counts, scene.palette.len(), dims)?;
     if m.surface_voxels > dims.nx * dims.ny {
         return Err(format!(
             "surface_voxels = {} exceeds the {} columns",

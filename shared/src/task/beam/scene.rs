@@ -8,7 +8,7 @@ use crate::genome::GenomeLimits;
 use crate::material::Palette;
 use crate::statics::StaticSolverParams;
 use crate::task::SceneError;
-use crate::task::error::{finite, positive};
+use crate::task::error::{finite, palette_and_limits, positive};
 use crate::voxel::DEFAULT_THRESHOLD;
 
 /// Everything a beam evaluation needs besides the genome and the resolution.
@@ -64,12 +64,7 @@ impl BeamScene {
 
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
-        self.palette
-            .validate()
-            .map_err(|e| SceneError::new("palette", e.to_string()))?;
-        self.limits
-            .validate()
-            .map_err(|e| SceneError::new("limits", e.to_string()))?;
+        palette_and_limits(&self.palette, &self.limits)?;
         self.target.validate()?;
         positive("length", self.length)?;
         positive("tip_load", self.tip_load)?;

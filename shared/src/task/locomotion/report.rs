@@ -11,6 +11,7 @@ use crate::export::{
 };
 use crate::genome::Genome;
 use crate::task::Artefact;
+use crate::task::error::counts_fit;
 use crate::voxel::GridDims;
 
 /// The paper's simulated robot's speed, % of body length per actuation cycle (Table IV).
@@ -167,20 +168,7 @@ pub(super) fn check_metrics(
     m: &LocomotionMetrics,
     dims: GridDims,
 ) -> Result<(), String> {
-    let cells = dims.cell_count();
-    if m.voxels == 0 || m.voxels > cells {
-        return Err(format!("voxels = {} outside 1..={cells}", m.voxels));
-    }
-    if m.material_counts.len() != scene.palette.len()
-        || m.material_counts.iter().sum::<usize>() != m.voxels
-    {
-        return Err(format!(
-            "material_counts {:?} do not add up to voxels = {} over {} materials",
-            m.material_counts,
-            m.voxels,
-            scene.palette.len()
-        ));
-    }
+    counts_fit(m.voxels, &m.material_counts, scene.palette.len(), dims)?;
     let dynamics = scene.dynamics_at(dims);
     let s = dynamics.voxel_size;
     let positive = |name: &str, v: f64| {

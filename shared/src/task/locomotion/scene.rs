@@ -8,7 +8,7 @@ use crate::dynamics::{DynamicScene, foam_palette};
 use crate::genome::GenomeLimits;
 use crate::material::Palette;
 use crate::task::SceneError;
-use crate::task::error::{finite, positive};
+use crate::task::error::{finite, palette_and_limits, positive};
 use crate::voxel::{DEFAULT_THRESHOLD, GridDims};
 
 /// Everything a locomotion evaluation needs besides the genome and the resolution.
@@ -64,12 +64,7 @@ impl Default for LocomotionScene {
 impl LocomotionScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
-        self.palette
-            .validate()
-            .map_err(|e| SceneError::new("palette", e.to_string()))?;
-        self.limits
-            .validate()
-            .map_err(|e| SceneError::new("limits", e.to_string()))?;
+        palette_and_limits(&self.palette, &self.limits)?;
         positive("workspace", self.workspace)?;
         finite("threshold", self.threshold)?;
         finite("heading_degrees", self.heading_degrees)?;

@@ -3,6 +3,7 @@
 use super::evaluate::{fitness, reference_deflection};
 use super::scene::{StiffnessMetrics, StiffnessScene};
 use crate::export::Block;
+use crate::task::error::counts_fit;
 use crate::voxel::GridDims;
 
 pub(super) fn summary(scene: &StiffnessScene, m: Option<&StiffnessMetrics>) -> serde_json::Value {
@@ -70,18 +71,7 @@ pub(super) fn check_metrics(
     m: &StiffnessMetrics,
     dims: GridDims,
 ) -> Result<(), String> {
-    let cells = dims.cell_count();
-    if m.voxels == 0 || m.voxels > cells {
-        return Err(format!("voxels = {} outside 1..={cells}", m.voxels));
-    }
-    if m.material_counts.len() != scene.palette.len()
-        || m.material_counts.iter().sum::<usize>() != m.voxels
-    {
-        return Err(format!(
-            "material_counts {:?} do not add up to voxels = {}",
-            m.material_counts, m.voxels
-        ));
-    }
+    counts_fit(m.voxels, &m.material_counts, scene.palette.len(), dims)?;
     if !(m.tip_deflection.is_finite() && m.tip_deflection > 0.0) {
         return Err(format!(
             "tip_deflection = {} is not a downward deflection",
@@ -91,8 +81,8 @@ pub(super) fn check_metrics(
     let hard = m.material_counts[usize::from(scene.hard_material)];
     let expected = StiffnessMetrics {
         relative_stiffness: reference_deflection(scene, dims) / m.tip_deflection,
-        hard_fraction: hard as f64 / cells as f64,
-        within_budget: hard as f64 / cells as f64 <= scene.max_hard_fraction,
+        hard_fraction: hard as f64 / dims.cell_count() as f64,
+        within_budget: hard as f64 / dims.cell_count() as f64 <= scene.max_hard_fraction,
         ..m.clone()
     };
     if expected != *m {

@@ -8,7 +8,7 @@ use crate::genome::GenomeLimits;
 use crate::material::Palette;
 use crate::statics::StaticSolverParams;
 use crate::task::SceneError;
-use crate::task::error::{finite, positive};
+use crate::task::error::{finite, palette_and_limits, positive};
 use crate::voxel::DEFAULT_THRESHOLD;
 
 /// Everything a stiffness evaluation needs besides the genome and the resolution.
@@ -51,12 +51,7 @@ impl Default for StiffnessScene {
 impl StiffnessScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
-        self.palette
-            .validate()
-            .map_err(|e| SceneError::new("palette", e.to_string()))?;
-        self.limits
-            .validate()
-            .map_err(|e| SceneError::new("limits", e.to_string()))?;
+        palette_and_limits(&self.palette, &self.limits)?;
         if usize::from(self.hard_material) >= self.palette.len() {
             return Err(SceneError::new(
                 "hard_material",
