@@ -5,7 +5,42 @@
 use crate::material::Palette;
 use crate::outcome::Failure;
 use crate::statics::{self, StaticLoadCase, StaticModel, StaticSolution, StaticSolverParams};
-use crate::voxel::VoxelGrid;
+use crate::task::SceneError;
+use crate::task::error::{finite, positive};
+use crate::voxel::{GridDims, VoxelGrid};
+
+/// The cantilever runs along y (clamped at y = 0, loaded at the last layer, deflecting in −z), so
+/// it needs two layers and y must be its longest count: 12x12x40 would be a 12-voxel beam 40
+/// voxels deep, almost surely a slip for the paper's 12x40x12.
+pub fn check_cantilever_dims(dims: GridDims) -> Result<(), String> {
+    if dims.ny < 2 {
+        return Err(format!(
+            "a cantilever needs at least 2 layers along y, got {dims}"
+        ));
+    }
+    if dims.ny < dims.nx || dims.ny < dims.nz {
+        return Err(format!(
+            "a cantilever runs along y, so ny must be its longest count (did you mean [{}, {}, {}]?)",
+            dims.nx, dims.nz, dims.ny
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the load case's own fields of a scene, naming the bad one.
+pub fn check_load_case(
+    length: f64,
+    tip_load: f64,
+    solver: &StaticSolverParams,
+    threshold: f64,
+) -> Result<(), SceneError> {
+    positive("length", length)?;
+    positive("tip_load", tip_load)?;
+    solver
+        .validate()
+        .map_err(|e| SceneError::new("solver", e.to_string()))?;
+    finite("threshold", threshold)
+}
 
 /// A solved cantilever: the model (for node look-ups) and its solution.
 #[derive(Debug)]

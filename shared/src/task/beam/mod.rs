@@ -13,6 +13,7 @@ pub use evaluate::simulate_beam;
 pub use scene::{BeamMetrics, BeamScene};
 pub use target::{NamedProfile, TargetProfile};
 
+use super::cantilever::check_cantilever_dims;
 use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
 use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
@@ -61,22 +62,8 @@ impl Task for BeamScene {
         self.length / dims.ny as f64
     }
 
-    /// The beam runs along y (clamped at y = 0, loaded at the last layer, deflecting in −z), so
-    /// it needs two layers and y must be its longest count: 12x12x40 would be a 12-voxel beam 40
-    /// voxels deep, almost surely a slip for the paper's 12x40x12.
     fn check_dims(&self, dims: GridDims) -> Result<(), String> {
-        if dims.ny < 2 {
-            return Err(format!(
-                "a beam needs at least 2 layers along y, got {dims}"
-            ));
-        }
-        if dims.ny < dims.nx || dims.ny < dims.nz {
-            return Err(format!(
-                "a beam runs along y, so ny must be its longest count (did you mean [{}, {}, {}]?)",
-                dims.nx, dims.nz, dims.ny
-            ));
-        }
-        Ok(())
+        check_cantilever_dims(dims)
     }
 
     /// Only voxels face-connected to the clamped `y = 0` layer carry load.

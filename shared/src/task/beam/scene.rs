@@ -8,7 +8,8 @@ use crate::genome::GenomeLimits;
 use crate::material::Palette;
 use crate::statics::StaticSolverParams;
 use crate::task::SceneError;
-use crate::task::error::{finite, palette_and_limits, positive};
+use crate::task::cantilever::check_load_case;
+use crate::task::error::palette_and_limits;
 use crate::voxel::DEFAULT_THRESHOLD;
 
 /// Everything a beam evaluation needs besides the genome and the resolution.
@@ -66,12 +67,7 @@ impl BeamScene {
     pub fn validate(&self) -> Result<(), SceneError> {
         palette_and_limits(&self.palette, &self.limits)?;
         self.target.validate()?;
-        positive("length", self.length)?;
-        positive("tip_load", self.tip_load)?;
-        self.solver
-            .validate()
-            .map_err(|e| SceneError::new("solver", e.to_string()))?;
-        finite("threshold", self.threshold)
+        check_load_case(self.length, self.tip_load, &self.solver, self.threshold)
     }
 }
 

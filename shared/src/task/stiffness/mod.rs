@@ -12,6 +12,7 @@ use std::path::Path;
 pub use evaluate::simulate_stiffness;
 pub use scene::{StiffnessMetrics, StiffnessScene};
 
+use super::cantilever::check_cantilever_dims;
 use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
 use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
@@ -50,14 +51,9 @@ impl Task for StiffnessScene {
         self.length / dims.ny as f64
     }
 
-    /// The same cantilever as the beam designer's: along y, at least two layers.
+    /// The same cantilever as the beam designer's.
     fn check_dims(&self, dims: GridDims) -> Result<(), String> {
-        if dims.ny < 2 || dims.ny < dims.nx || dims.ny < dims.nz {
-            return Err(format!(
-                "a cantilever runs along y with at least 2 layers, so ny must be its longest count, got {dims}"
-            ));
-        }
-        Ok(())
+        check_cantilever_dims(dims)
     }
 
     fn keep(&self, grid: &VoxelGrid) -> VoxelGrid {

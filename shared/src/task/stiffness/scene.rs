@@ -8,7 +8,8 @@ use crate::genome::GenomeLimits;
 use crate::material::Palette;
 use crate::statics::StaticSolverParams;
 use crate::task::SceneError;
-use crate::task::error::{finite, palette_and_limits, positive};
+use crate::task::cantilever::check_load_case;
+use crate::task::error::palette_and_limits;
 use crate::voxel::DEFAULT_THRESHOLD;
 
 /// Everything a stiffness evaluation needs besides the genome and the resolution.
@@ -68,12 +69,7 @@ impl StiffnessScene {
                 format!("{} must be in (0, 1]", self.max_hard_fraction),
             ));
         }
-        positive("length", self.length)?;
-        positive("tip_load", self.tip_load)?;
-        self.solver
-            .validate()
-            .map_err(|e| SceneError::new("solver", e.to_string()))?;
-        finite("threshold", self.threshold)
+        check_load_case(self.length, self.tip_load, &self.solver, self.threshold)
     }
 }
 
@@ -83,7 +79,7 @@ pub struct StiffnessMetrics {
     /// Mean downward deflection of the tip layer, m (every tip voxel, not only the top surface).
     pub tip_deflection: f64,
     /// Tip stiffness relative to the whole workspace filled with hard material, by beam theory
-    /// (P L³ / 3EI): the fitness of a design within its budget.
+    /// (P l³ / 3EI over the clamp-to-tip lever l): the fitness of a design within its budget.
     pub relative_stiffness: f64,
     /// Hard voxels over the workspace's voxels.
     pub hard_fraction: f64,
