@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
 use crate::cluster::settings::ClusterSettings;
+pub use crate::results::ExportSection;
 use crate::search::{
     CrossoverParams, LocalSearchParams, MigrationParams, ResolutionSchedule, StepAdaptation,
     Variation,
@@ -51,6 +52,9 @@ pub struct RawConfig {
     pub search: SearchSection,
     #[serde(default)]
     pub budget: BudgetSection,
+    /// End-of-run exports beyond the fabrication files (slice stack, finer-resolution check).
+    #[serde(default)]
+    pub export: ExportSection,
     pub resolution: ResolutionSchedule,
     pub scene: Scene,
 }
@@ -267,6 +271,7 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
         ));
     }
     ClusterSettings::try_from(&raw.cluster)?;
+    raw.export.validate()?;
     raw.resolution.validate()?;
     raw.scene.validate().map_err(|e| format!("scene.{e}"))?;
     for (i, &[nx, ny, nz]) in raw.resolution.levels.iter().enumerate() {

@@ -13,7 +13,7 @@
 //!   best_voxels.json      the best design voxelized at the final resolution
 //!   summary.json, summary.md   the final table
 //!   exports/              fabrication files of the best design (STL, 3MF, VXA, SVG layers, PNG,
-//!                         smooth STL of the genome's field)
+//!                         smooth STL of the genome's field, slices/ for voxel printing)
 //!   island-<i>-best.png   a render of each island's best design
 //!   progress_evaluations.png, progress_wall_time.png   the best of each island as the run went
 //!   the task's own files  profile.png and profile.csv (beam); animation.gif, trajectory.png and
@@ -21,8 +21,10 @@
 //!   report.md, report.html     the run report: config, pictures, the paper-style table, links
 //! ```
 
+mod finishing;
 mod plots;
 mod report;
 mod writer;
 
+pub use finishing::{ExportSection, FinerCheck};
 pub use writer::ResultWriter;

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use amorph::export::{Block, Link, Picture, Report};
 use amorph::task::{Artefact, Scene};
 
+use super::finishing::FinerCheck;
 use crate::summary::RunSummary;
 
 /// What the report shows besides the summary: files written by the results writer.
@@ -17,6 +18,7 @@ pub(super) struct ReportInputs<'a> {
     pub exports: &'a [PathBuf],
     pub island_pictures: &'a [String],
     pub artefacts: &'a [Artefact],
+    pub finer: Option<&'a FinerCheck>,
     pub config_text: &'a str,
 }
 
@@ -42,6 +44,10 @@ pub(super) fn run_report(summary: &RunSummary, inputs: &ReportInputs<'_>) -> Rep
     let (heading, table) = inputs.scene.table(&best.outcome, summary.dims);
     report.push(Block::Heading(heading));
     report.push(table);
+    if let Some(finer) = inputs.finer {
+        report.push(Block::Heading("Twice as fine".into()));
+        report.push(Block::Paragraph(finer.sentence()));
+    }
 
     report.push(Block::Heading("Best design".into()));
     let mut pictures = vec![picture("exports/design.png", "best design, isometric view")];
@@ -155,7 +161,10 @@ fn words(camel: &str) -> String {
 /// What a fabrication file is for, from its name.
 fn export_label(path: &Path) -> String {
     let name = path.display().to_string();
+    let in_slices = path.starts_with("slices");
     let what = match path.extension().and_then(|e| e.to_str()) {
+        Some("png") if in_slices => "voxel-print slice, the first of the stack",
+        Some("json") if in_slices => "voxel-print manifest: pitch, size, colours",
         Some("stl") => "binary STL, mm",
         Some("3mf") => "multi-material 3MF",
         Some("vxa") => "VoxCAD / Voxelyze",

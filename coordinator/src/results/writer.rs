@@ -7,6 +7,7 @@ use amorph::task::{Outcome, Scene};
 use amorph::voxel::{GridDims, VoxelGrid};
 use serde::Serialize;
 
+use super::finishing::FinerCheck;
 use super::plots::write_progress;
 use super::report::{ReportInputs, run_report, summary_markdown};
 use crate::config::RunConfig;
@@ -145,6 +146,31 @@ impl ResultWriter {
             summary.dims,
             SMOOTH_SAMPLES_AT_END,
         )?);
+        let export = &self.config.raw.export;
+        if export.print {
+            // A stack too large for its pitch costs the slices, not the run's other results.
+            match amorph::export::write_slice_stack(
+                &self.dir.join("exports"),
+                &best.genome,
+                scene,
+                summary.dims,
+                export.pitch(),
+            ) {
+                // The report links the first slice and the manifest (the last file), not every
+                // layer.
+                Ok(files) => exports.extend(
+                    files
+                        .first()
+                        .into_iter()
+                        .chain(files.last().filter(|_| files.len() > 1))
+                        .cloned(),
+                ),
+                Err(e) => tracing::warn!(error = %e, "the voxel-print slices were not written"),
+            }
+        }
+        let finer = export
+            .finer_check
+            .then(|| FinerCheck::run(scene, &best.genome, summary.dims, &best.outcome));
         let island_pictures = self.island_pictures(summary, scene)?;
         // The task's own pictures may simulate the best design once more (a robot's walk); a
         // failure there costs those pictures, not the run's other results.
@@ -166,6 +192,9 @@ impl ResultWriter {
             "resolution": summary.dims.to_string(),
             "best_fitness": best.outcome.fitness(),
         });
+        if let (Some(json), Some(finer)) = (json.as_object_mut(), &finer) {
+            json.insert("finer_check".into(), serde_json::json!(finer));
+        }
         if let (Some(json), serde_json::Value::Object(task)) =
             (json.as_object_mut(), scene.summary(&best.outcome))
         {
@@ -185,6 +214,7 @@ impl ResultWriter {
                 exports: &exports,
                 island_pictures: &island_pictures,
                 artefacts: &artefacts,
+                finer: finer.as_ref(),
                 config_text: &self.config_text,
             },
         );

@@ -6,6 +6,7 @@ pub mod layers;
 mod merge;
 pub mod mesh;
 pub mod plot;
+pub mod print;
 pub mod recording;
 pub mod render;
 pub mod report;
@@ -20,6 +21,7 @@ pub use animation::{AnimationError, AnimationOptions, animation_gif, write_locom
 pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
 pub use plot::{PlotSpec, Series, line_plot, line_plot_over};
+pub use print::{PrintError, PrintPitch, Slicer, write_slice_stack};
 pub use recording::{LocomotionRecording, RecordingOptions, Sample, record_locomotion};
 pub use render::{Image, render_isometric};
 pub use report::{Block, Link, Picture, Report};

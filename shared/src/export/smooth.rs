@@ -237,13 +237,8 @@ fn near_design(design: &VoxelGrid) -> Vec<bool> {
     let d = design.dims();
     let mut near = vec![false; d.cell_count()];
     for i in design.filled_indices() {
-        let [x, y, z] = d.coords(i);
-        for nz in z.saturating_sub(1)..(z + 2).min(d.nz) {
-            for ny in y.saturating_sub(1)..(y + 2).min(d.ny) {
-                for nx in x.saturating_sub(1)..(x + 2).min(d.nx) {
-                    near[d.index(nx, ny, nz)] = true;
-                }
-            }
+        for n in d.neighbourhood(i) {
+            near[n] = true;
         }
     }
     near

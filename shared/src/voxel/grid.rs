@@ -39,6 +39,17 @@ impl GridDims {
         [x, yz % self.ny, yz / self.ny]
     }
 
+    /// Flat indices of the cell at `index` and of its up to 26 neighbours inside the grid (faces,
+    /// edges and corners), in index order.
+    pub fn neighbourhood(&self, index: usize) -> impl Iterator<Item = usize> + '_ {
+        let [x, y, z] = self.coords(index);
+        let span = |c: usize, n: usize| c.saturating_sub(1)..(c + 2).min(n);
+        span(z, self.nz).flat_map(move |nz| {
+            span(y, self.ny)
+                .flat_map(move |ny| span(x, self.nx).map(move |nx| self.index(nx, ny, nz)))
+        })
+    }
+
     /// Centre of cell (x, y, z) in normalized workspace units ([0, 1] per axis).
     #[inline]
     pub fn normalized_centre(&self, x: usize, y: usize, z: usize) -> [f64; 3] {
@@ -158,6 +169,23 @@ impl VoxelGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_neighbourhood_is_the_cells_within_one_step_on_every_axis() {
+        let d = GridDims::new(4, 3, 5);
+        for i in 0..d.cell_count() {
+            let [x, y, z] = d.coords(i).map(|c| c as isize);
+            let expected: Vec<usize> = (0..d.cell_count())
+                .filter(|&j| {
+                    let c = d.coords(j).map(|c| c as isize);
+                    (c[0] - x).abs() <= 1 && (c[1] - y).abs() <= 1 && (c[2] - z).abs() <= 1
+                })
+                .collect();
+            assert_eq!(d.neighbourhood(i).collect::<Vec<_>>(), expected, "cell {i}");
+        }
+        assert_eq!(d.neighbourhood(0).count(), 8);
+        assert_eq!(d.neighbourhood(d.index(1, 1, 1)).count(), 27);
+    }
 
     #[test]
     fn index_and_coords_round_trip() {

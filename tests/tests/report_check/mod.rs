@@ -60,7 +60,25 @@ pub fn check_report(run_dir: &Path, row_label: &str, expected_cell: &str) -> Str
     assert_eq!(md_set, html_set);
     let mut exports = BTreeSet::new();
     files_under(&run_dir.join("exports"), "exports/", &mut exports);
-    for export in &exports {
+    // A slice stack has a PNG per printed layer (hundreds): the report links its manifest and its
+    // first slice, and every slice must be one the manifest counts.
+    let slices: Vec<&String> = exports
+        .iter()
+        .filter(|e| e.starts_with("exports/slices/slice-"))
+        .collect();
+    if !slices.is_empty() {
+        let manifest = "exports/slices/manifest.json".to_string();
+        assert!(
+            md_set.contains(&manifest),
+            "the slice manifest is not linked"
+        );
+        assert!(md_set.contains(slices[0]), "{} is not linked", slices[0]);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(run_dir.join(&manifest)).unwrap())
+                .unwrap();
+        assert_eq!(json["layers"].as_u64(), Some(slices.len() as u64));
+    }
+    for export in exports.iter().filter(|e| !slices.contains(e)) {
         assert!(md_set.contains(export), "{export} is not linked");
     }
     for plot in ["progress_evaluations.png", "progress_wall_time.png"] {

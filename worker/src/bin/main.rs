@@ -110,6 +110,16 @@ enum Command {
         /// whole number per voxel).
         #[arg(long, value_name = "N")]
         smooth: Option<usize>,
+        /// Also write slices/: a voxel-print slice stack (one PNG per printed layer, sampled from
+        /// the genome's continuous field) and its manifest.
+        #[arg(long)]
+        print: bool,
+        /// The printer's dots per inch along x and y, for --print.
+        #[arg(long, value_name = "X,Y", value_delimiter = ',', num_args = 2, default_values_t = [600.0, 300.0])]
+        print_dpi: Vec<f64>,
+        /// The printer's layer thickness in millimetres, for --print.
+        #[arg(long, value_name = "MM", default_value_t = 0.027)]
+        print_layer_mm: f64,
     },
 }
 
@@ -139,6 +149,9 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             design,
             out,
             smooth,
+            print: slices,
+            print_dpi,
+            print_layer_mm,
         } => {
             let (genome, scene, dims) = design.load()?;
             genome
@@ -152,6 +165,19 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                     amorph::export::write_smooth_surfaces(&out, &genome, &scene, dims, samples)
                         .with_context(|| {
                             format!("writing smooth surfaces into {}", out.display())
+                        })?,
+                );
+            }
+            if slices {
+                let pitch = amorph::export::PrintPitch {
+                    dpi_x: print_dpi[0],
+                    dpi_y: print_dpi[1],
+                    layer_mm: print_layer_mm,
+                };
+                files.extend(
+                    amorph::export::write_slice_stack(&out, &genome, &scene, dims, pitch)
+                        .with_context(|| {
+                            format!("writing the slice stack into {}", out.display())
                         })?,
                 );
             }
