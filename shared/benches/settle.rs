@@ -1,0 +1,122 @@
+//! The settling study (issue 14): how much a damped settle shortens a locomotion evaluation, and
+//! how much it moves the fitness, against how much halving the time step moves it.
+//!
+//! `cargo bench -p amorph --bench settle -- N [ROBOTS]` evaluates ROBOTS (default 20) random
+//! 88-point robots in an N³ workspace (1 mm voxels at N = 20, as the paper; 2 mm at N = 10, as
+//! `configs/locomotion.toml`) three ways, single thread:
+//! - `reference`: the scene's own damping while settling (the protocol before issue 14);
+//! - `settled`: `settle.damping` at its default;
+//! - `half_step`: the reference at half the time step, the yardstick for what a change of
+//!   fitness means (a walking gait is a chaotic contact problem).
+//!
+//! and prints one CSV row per robot and evaluation, then the medians and maxima of the relative
+//! changes and the ratio of steps and wall time.
+
+use std::time::Instant;
+
+use amorph::dynamics::{DynamicScene, foam_palette};
+use amorph::genome::{GenomeLimits, random_genome};
+use amorph::task::locomotion::{LocomotionOutcome, LocomotionProtocol, simulate_locomotion};
+use amorph::voxel::{DEFAULT_THRESHOLD, GridDims, VoxelGrid, keep_largest_component, voxelize};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+fn robot(seed: u64, n: usize) -> VoxelGrid {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let genome = random_genome(&mut rng, 88, &GenomeLimits::default(), 2);
+    let grid = voxelize(&genome, GridDims::new(n, n, n), 2, DEFAULT_THRESHOLD);
+    keep_largest_component(&grid)
+}
+
+fn evaluate(
+    grid: &VoxelGrid,
+    n: usize,
+    settle_damping: Option<f64>,
+    dt_fraction: f64,
+) -> (LocomotionOutcome, f64) {
+    let mut scene = DynamicScene::paper_locomotion();
+    scene.voxel_size = 0.02 / n as f64;
+    scene.dt_fraction = dt_fraction;
+    let mut protocol = LocomotionProtocol::default();
+    protocol.settle.damping = settle_damping.unwrap_or(scene.damping.global);
+    let start = Instant::now();
+    let outcome = simulate_locomotion(grid, &foam_palette(), &scene, &protocol);
+    (outcome, start.elapsed().as_secs_f64())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+fn main() {
+    let args: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let n = args.first().copied().unwrap_or(10);
+    let robots = args.get(1).copied().unwrap_or(20) as u64;
+    println!(
+        "seed,voxels,case,fitness_mm,speed_percent_per_cycle,settle_time_s,steps,wall_s,status"
+    );
+    let (mut settled_change, mut half_change) = (Vec::new(), Vec::new());
+    let (mut steps, mut wall) = ([0u64; 2], [0.0f64; 2]);
+    for seed in 0..robots {
+        let grid = robot(seed, n);
+        let cases = [
+            ("reference", None, 1.0),
+            (
+                "settled",
+                Some(LocomotionProtocol::default().settle.damping),
+                1.0,
+            ),
+            ("half_step", None, 0.5),
+        ];
+        let mut fitness = Vec::new();
+        for (k, (name, damping, dt_fraction)) in cases.into_iter().enumerate() {
+            let (o, w) = evaluate(&grid, n, damping, dt_fraction);
+            println!(
+                "{seed},{},{name},{:.6},{:.4},{:.4},{},{w:.2},{:?}",
+                o.voxel_count,
+                o.fitness * 1e3,
+                o.speed_percent_per_cycle,
+                o.settle_time,
+                o.steps,
+                o.status
+            );
+            if k < 2 {
+                steps[k] += o.steps;
+                wall[k] += w;
+            }
+            fitness.push((o.fitness, o.body_length));
+        }
+        // Relative to the reference gait, or to 1 % of the body length for a robot that barely
+        // moves (a relative change of nothing is not a measure of anything).
+        let (reference, body) = fitness[0];
+        let scale = reference.abs().max(0.01 * body);
+        settled_change.push((fitness[1].0 - reference).abs() / scale);
+        half_change.push((fitness[2].0 - reference).abs() / scale);
+    }
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    println!(
+        "# {robots} robots at {n}^3: |settled - reference| / reference: median {:.3}, max {:.3}; \
+         |half step - reference| / reference: median {:.3}, max {:.3}",
+        median(settled_change.clone()),
+        max(&settled_change),
+        median(half_change.clone()),
+        max(&half_change)
+    );
+    println!(
+        "# steps settled / reference {:.3} ({} / {}); wall {:.3} ({:.1} s / {:.1} s)",
+        steps[1] as f64 / steps[0] as f64,
+        steps[1],
+        steps[0],
+        wall[1] / wall[0],
+        wall[1],
+        wall[0]
+    );
+}
