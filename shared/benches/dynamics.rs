@@ -326,8 +326,7 @@ fn locomotion_run(r: usize, dt_fraction: f64) -> StudyPoint {
             max_time: 0.1,
             still_speed: 0.0,
             check_interval: 0.01,
-            // The scene's own (none), as the study was measured before the damped settle.
-            damping: 0.0,
+            damping: None,
         },
         ..LocomotionProtocol::default()
     };

@@ -1,11 +1,11 @@
 //! The settling study (issue 14): how much a damped settle shortens a locomotion evaluation, and
 //! how much it moves the fitness, against how much halving the time step moves it.
 //!
-//! `cargo bench -p amorph --bench settle -- N [ROBOTS]` evaluates ROBOTS (default 20) random
+//! `cargo bench -p amorph --bench settle -- N [ROBOTS [ZETA]]` evaluates ROBOTS (default 20) random
 //! 88-point robots in an N³ workspace (1 mm voxels at N = 20, as the paper; 2 mm at N = 10, as
 //! `configs/locomotion.toml`) three ways, single thread:
 //! - `reference`: the scene's own damping while settling (the protocol before issue 14);
-//! - `settled`: `settle.damping` at its default;
+//! - `settled`: `settle.damping` = ZETA (default 0.1);
 //! - `half_step`: the reference at half the time step, the yardstick for what a change of
 //!   fitness means (a walking gait is a chaotic contact problem).
 //!
@@ -38,7 +38,7 @@ fn evaluate(
     scene.voxel_size = 0.02 / n as f64;
     scene.dt_fraction = dt_fraction;
     let mut protocol = LocomotionProtocol::default();
-    protocol.settle.damping = settle_damping.unwrap_or(scene.damping.global);
+    protocol.settle.damping = settle_damping;
     let start = Instant::now();
     let outcome = simulate_locomotion(grid, &foam_palette(), &scene, &protocol);
     (outcome, start.elapsed().as_secs_f64())
@@ -54,12 +54,13 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn main() {
-    let args: Vec<usize> = std::env::args()
+    let args: Vec<f64> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
         .collect();
-    let n = args.first().copied().unwrap_or(10);
-    let robots = args.get(1).copied().unwrap_or(20) as u64;
+    let n = args.first().map_or(10, |&a| a as usize);
+    let robots = args.get(1).map_or(20, |&a| a as u64);
+    let zeta = args.get(2).copied().unwrap_or(0.1);
     println!(
         "seed,voxels,case,fitness_mm,speed_percent_per_cycle,settle_time_s,steps,wall_s,status"
     );
@@ -69,11 +70,7 @@ fn main() {
         let grid = robot(seed, n);
         let cases = [
             ("reference", None, 1.0),
-            (
-                "settled",
-                Some(LocomotionProtocol::default().settle.damping),
-                1.0,
-            ),
+            ("settled", Some(zeta), 1.0),
             ("half_step", None, 0.5),
         ];
         let mut fitness = Vec::new();
@@ -103,7 +100,7 @@ fn main() {
     }
     let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     println!(
-        "# {robots} robots at {n}^3: |settled - reference| / reference: median {:.3}, max {:.3}; \
+        "# {robots} robots at {n}^3, settle.damping {zeta}: |settled - reference| / reference: median {:.3}, max {:.3}; \
          |half step - reference| / reference: median {:.3}, max {:.3}",
         median(settled_change.clone()),
         max(&settled_change),
