@@ -49,6 +49,8 @@ fn the_package_holds_one_object_per_material_with_its_mesh_and_volume() {
     assert_eq!(objects.len(), 2);
     for object in objects {
         let m: usize = object.attribute("pindex").unwrap().parse().unwrap();
+        // Named after its material, so a slicer lists the bodies by material.
+        assert_eq!(object.attribute("name"), Some(palette.0[m].name.as_str()));
         let vertices: Vec<[f64; 3]> = object
             .descendants()
             .filter(|n| n.has_tag_name("vertex"))

@@ -141,6 +141,14 @@ pub fn write_smooth_surfaces(
     Ok(written)
 }
 
+/// Text as XML character data or as an attribute value in double quotes.
+pub(crate) fn xml_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
 fn file_safe(name: &str) -> String {
     name.chars()
         .map(|c| {

@@ -34,10 +34,7 @@ fn model_xml(meshes: &[TriangleMesh], palette: &Palette) -> String {
         let _ = write!(
             x,
             r##"<base name="{}" displaycolor="#{r:02X}{g:02X}{b:02X}FF"/>"##,
-            m.name
-                .replace('&', "&amp;")
-                .replace('"', "&quot;")
-                .replace('<', "&lt;")
+            super::xml_escape(&m.name)
         );
     }
     let _ = writeln!(x, "</basematerials>");
@@ -48,9 +45,11 @@ fn model_xml(meshes: &[TriangleMesh], palette: &Palette) -> String {
         }
         let id = m + 2;
         objects.push(id);
+        // Named after its material, so a slicer's object list says which body is which.
         let _ = write!(
             x,
-            r#"<object id="{id}" type="model" pid="1" pindex="{m}"><mesh><vertices>"#
+            r#"<object id="{id}" name="{}" type="model" pid="1" pindex="{m}"><mesh><vertices>"#,
+            super::xml_escape(palette.0.get(m).map_or("", |p| &p.name))
         );
         for v in &mesh.vertices {
             let _ = write!(x, r#"<vertex x="{}" y="{}" z="{}"/>"#, v[0], v[1], v[2]);

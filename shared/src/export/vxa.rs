@@ -72,7 +72,7 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
             w,
             "<Material ID=\"{}\"><MatType>0</MatType><Name>{}</Name><Display><Red>{r}</Red><Green>{g}</Green><Blue>{b}</Blue><Alpha>1</Alpha></Display><Mechanical><MatModel>0</MatModel><Elastic_Mod>{}</Elastic_Mod><Plastic_Mod>0</Plastic_Mod><Yield_Stress>0</Yield_Stress><FailModel>0</FailModel><Fail_Stress>0</Fail_Stress><Fail_Strain>0</Fail_Strain><Density>{}</Density><Poissons_Ratio>{}</Poissons_Ratio><CTE>{cte}</CTE><uStatic>{}</uStatic><uDynamic>{}</uDynamic><Actuated>{}</Actuated></Mechanical></Material>",
             id.index() + 1,
-            escape(&m.name),
+            super::xml_escape(&m.name),
             m.youngs_modulus,
             m.density,
             m.poisson_ratio,
@@ -131,12 +131,6 @@ fn write_environment(w: &mut String, scene: &DynamicScene) {
         -scene.gravity,
         u8::from(scene.floor.is_some()),
     );
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 /// Reads the design (lattice, palette, structure) of a VXA file.
