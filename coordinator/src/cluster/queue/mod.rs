@@ -47,6 +47,19 @@ struct WorkerState {
     leased: HashSet<TaskId>,
 }
 
+/// A registered worker that has just been heard from: `now` is its last sign of life.
+fn seen(
+    workers: &mut HashMap<WorkerId, WorkerState>,
+    worker: WorkerId,
+    now: Instant,
+) -> Result<&mut WorkerState, QueueError> {
+    let w = workers
+        .get_mut(&worker)
+        .ok_or(QueueError::UnknownWorker(worker))?;
+    w.last_seen = now;
+    Ok(w)
+}
+
 #[derive(Debug)]
 struct State {
     workers: HashMap<WorkerId, WorkerState>,
@@ -154,11 +167,7 @@ impl TaskQueue {
     ) -> Result<(Vec<Arc<Task>>, bool), QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
-        let w = s
-            .workers
-            .get_mut(&worker)
-            .ok_or(QueueError::UnknownWorker(worker))?;
-        w.last_seen = now;
+        let w = seen(&mut s.workers, worker, now)?;
         if s.run_finished {
             return Ok((Vec::new(), true));
         }
@@ -259,11 +268,7 @@ impl TaskQueue {
     ) -> Result<(Vec<TaskId>, bool), QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
-        let w = s
-            .workers
-            .get_mut(&worker)
-            .ok_or(QueueError::UnknownWorker(worker))?;
-        w.last_seen = now;
+        seen(&mut s.workers, worker, now)?;
         let mut revoked = Vec::new();
         for &id in active {
             match s.tasks.get_mut(&id).map(|t| &mut t.phase) {
