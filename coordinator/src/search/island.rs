@@ -5,7 +5,7 @@
 //! fitness. The result depends only on the island's RNG stream, never on who evaluated what when.
 
 use amorph::genome::{
-    CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate, perturb,
+    CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate,
     random_genome,
 };
 use amorph::task::Outcome;
@@ -109,13 +109,7 @@ impl Island {
         let local = &breeding.variation.local_search;
         for _ in 0..nudges {
             let mut genome = self.population[best].genome.clone();
-            perturb(
-                &mut genome,
-                &mut self.rng,
-                local.probability,
-                local.step,
-                &breeding.limits,
-            );
+            local.nudge(&mut genome, &mut self.rng, &breeding.limits);
             children.push(Child {
                 genome,
                 dominant_parent: best,
@@ -302,6 +296,7 @@ mod tests {
         let b = breeding(Variation {
             local_search: LocalSearchParams {
                 fraction: 0.5,
+                points: 0,
                 probability: 1.0,
                 step: 0.01,
             },
@@ -321,6 +316,45 @@ mod tests {
                 );
             }
             c.genome.validate(&b.limits, 2).expect("within limits");
+        }
+    }
+
+    #[test]
+    fn a_point_nudge_moves_exactly_the_chosen_points_and_nothing_else() {
+        let mut isl = island(0, &[0.1, 0.2], &[-5.0, -1.0]);
+        let best = random_genome(isl.rng_mut(), 30, &GenomeLimits::default(), 2);
+        isl.population[1].genome = best.clone();
+        for points in [1, 3, 40] {
+            let b = breeding(Variation {
+                local_search: LocalSearchParams {
+                    fraction: 1.0,
+                    points,
+                    ..Default::default()
+                },
+                ..Default::default()
+            });
+            for c in isl.breed(8, &b) {
+                assert!(c.nudge);
+                assert_eq!(c.genome.len(), best.len());
+                let moved: Vec<_> = c
+                    .genome
+                    .points
+                    .iter()
+                    .zip(&best.points)
+                    .filter(|(p, q)| p != q)
+                    .collect();
+                // A Gaussian step moves all five parameters of a chosen point (a clamp to a bound
+                // could leave one, never all five, where they were).
+                assert_eq!(moved.len(), points.min(best.len()), "{points} points asked");
+                for (p, q) in moved {
+                    assert_eq!(p.material, q.material);
+                    assert!(
+                        (0..3).all(|a| p.position[a] != q.position[a])
+                            || p.position.iter().any(|&v| v == 0.0 || v == 1.0)
+                    );
+                }
+                c.genome.validate(&b.limits, 2).expect("within limits");
+            }
         }
     }
 

@@ -5,7 +5,7 @@ mod operators;
 mod point;
 
 pub use operators::{
-    Crossover, CutPlane, DominantParent, MutationParams, crossover, mutate, perturb, random_genome,
-    random_point,
+    Crossover, CutPlane, DominantParent, MutationParams, crossover, mutate, perturb,
+    perturb_points, random_genome, random_point,
 };
 pub use point::{GaussianPoint, Genome, GenomeError, GenomeLimits};

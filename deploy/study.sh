@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# Reproducible search studies (docs/evolution.md): runs one config over several seeds, each a
+# fresh single-coordinator run with one local worker, and tabulates what the runs wrote.
+#
+#   deploy/study.sh run <out> <config.toml> [--extra <snippet.toml>] [--target <rms %>] [--label <l>] <seed>...
+#   deploy/study.sh table <out> [<out>...]
+#
+# `run` copies the config per seed with `name = <label>-s<seed>`, `seed = <seed>` and
+# `results_dir = <out>`, appends the TOML snippet (sections the config does not already have,
+# e.g. `[search.local_search]`), sets `budget.target_rms_percent`, and runs the seeds one after
+# another; start two `run`s to use two cores. `table` prints one markdown row per run from its
+# config.toml, summary.json and history.csv: the best RMS error at the final resolution, and the
+# evaluations at which the run first reached the paper's simulated error (Table III) and half of it.
+# COORDINATOR overrides the binary (default target/release/coordinator).
+set -euo pipefail
+
+usage() {
+    sed -n '4,5p' "$0" | sed 's/^# *//' >&2
+    exit 2
+}
+
+run() {
+    local out=$1 config=$2
+    shift 2
+    local extra="" target="" label
+    label=$(basename "$config" .toml)
+    while [[ $# -gt 0 && $1 == --* ]]; do
+        case $1 in
+        --extra) extra=$2 ;;
+        --target) target=$2 ;;
+        --label) label=$2 ;;
+        *) usage ;;
+        esac
+        shift 2
+    done
+    [[ $# -gt 0 ]] || usage
+    local bin=${COORDINATOR:-target/release/coordinator}
+    [[ -x $bin ]] || { echo "study: no coordinator binary at $bin (cargo build --release)" >&2; exit 1; }
+    mkdir -p "$out/configs" "$out/logs"
+    for seed in "$@"; do
+        local name="$label-s$seed" file="$out/configs/$label-s$seed.toml"
+        {
+            echo "name = \"$name\""
+            echo "seed = $seed"
+            echo "results_dir = \"$(cd "$out" && pwd)\""
+            grep -Ev '^(name|seed|results_dir)[[:space:]]*=' "$config" |
+                if [[ -n $target ]]; then
+                    sed -E "s/^target_rms_percent[[:space:]]*=.*/target_rms_percent = $target/"
+                else
+                    cat
+                fi
+            if [[ -n $extra ]]; then
+                echo
+                cat "$extra"
+            fi
+        } >"$file"
+        echo "study: $name started $(date -Is), load $(cut -d' ' -f1-3 /proc/loadavg)" >&2
+        "$bin" --config "$file" --local-workers 1 --fresh >"$out/logs/$name.log" 2>&1 ||
+            echo "study: $name failed, see $out/logs/$name.log" >&2
+        echo "study: $name ended $(date -Is), load $(cut -d' ' -f1-3 /proc/loadavg)" >&2
+    done
+}
+
+table() {
+    python3 - "$@" <<'EOF'
+import csv, json, pathlib, sys, tomllib
+
+# The paper's simulated RMS errors (Table III), percent of the tip deflection.
+PAPER = {"straight": 0.10, "circular_arc": 0.10, "discontinuous_slope": 0.86, "polynomial4": 0.90}
+
+print("| run | target | seed | evaluations | stop | best RMS % (final level) | paper | reached paper at | reached half at | wall s |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for out in sys.argv[1:]:
+    for run in sorted(p for p in pathlib.Path(out).iterdir() if (p / "history.csv").exists()):
+        config = tomllib.loads((run / "config.toml").read_text())
+        target = config.get("scene", {}).get("target")
+        final = "x".join(str(n) for n in config["resolution"]["levels"][-1])
+        rows = list(csv.DictReader(open(run / "history.csv")))
+        rms_key = next(k for k in rows[0] if k.startswith("best_") and k != "best_fitness")
+        best, first, evals, wall = None, {}, 0, 0.0
+        paper = PAPER.get(target)
+        for r in rows:
+            evals, wall = int(r["evaluations"]), float(r["wall_seconds"])
+            if r["resolution"] != final or not r[rms_key]:
+                continue
+            v = float(r[rms_key])
+            best = v if best is None else min(best, v)
+            for name, level in (("paper", paper), ("half", paper and paper / 2)):
+                if level is not None and v <= level and name not in first:
+                    first[name] = evals
+        summary = run / "summary.json"
+        stop = json.loads(summary.read_text())["stop"] if summary.exists() else "running"
+        fmt = lambda v: "–" if v is None else f"{v:.4g}"
+        print(f"| {run.name} | {target} | {config['seed']} | {evals} | {stop} | {fmt(best)} | "
+              f"{fmt(paper)} | {first.get('paper', '–')} | {first.get('half', '–')} | {wall:.0f} |")
+EOF
+}
+
+case ${1:-} in
+run)
+    shift
+    [[ $# -ge 3 ]] || usage
+    run "$@"
+    ;;
+table)
+    shift
+    [[ $# -ge 1 ]] || usage
+    table "$@"
+    ;;
+*) usage ;;
+esac
