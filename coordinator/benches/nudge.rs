@@ -1,7 +1,7 @@
 //! Local-search nudges from a plateaued design (issue 13), figures in docs/evolution.md.
 //!
 //! `cargo bench -p amorph-coordinator --bench nudge -- <design.json> <config.toml> <evaluations>
-//! <points>,<probability>,<step> [...]`: for each nudge setting, a (1+1) climb from the design in
+//! <points>,<probability>,<step>[,<insertion>] [...]`: for each nudge setting, a (1+1) climb from the design in
 //! `design.json` (a `best_genome.json` or a test fixture: genome and resolution) under the scene
 //! of `config.toml`, evaluating one nudge at a time and keeping it only if strictly fitter, as
 //! crowding keeps a nudge of the best. Prints, per setting, the improvements, the nudges that left
@@ -21,7 +21,7 @@ use amorph::task::{Scene, Task};
 use amorph::voxel::GridDims;
 use amorph::voxel::VoxelGrid;
 use amorph_coordinator::RunConfig;
-use amorph_coordinator::search::LocalSearchParams;
+use amorph_coordinator::search::{BoundarySite, LocalSearchParams};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -32,7 +32,7 @@ fn main() {
         .collect();
     if args.len() < 4 {
         eprintln!(
-            "usage: nudge <design.json> <config.toml> <evaluations> <points>,<probability>,<step>..."
+            "usage: nudge <design.json> <config.toml> <evaluations> <points>,<probability>,<step>[,<insertion>]... | voxels"
         );
         std::process::exit(2);
     }
@@ -67,6 +67,7 @@ fn main() {
             points: v[0] as usize,
             probability: v[1],
             step: v[2],
+            insertion: v.get(3).copied().unwrap_or(0.0),
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let (mut best, mut best_outcome) = (genome.clone(), start.clone());
@@ -74,7 +75,8 @@ fn main() {
         let (mut improved, mut unchanged) = (0, 0);
         for _ in 0..evaluations {
             let mut child = best.clone();
-            local.nudge(&mut child, &mut rng, scene.limits());
+            let site = (local.insertion > 0.0).then(|| BoundarySite::new(&best, scene, dims));
+            local.step_from_best(&mut child, &mut rng, site.as_ref(), scene);
             let design = scene.design(&child, dims);
             if design == best_design {
                 unchanged += 1;
@@ -87,10 +89,11 @@ fn main() {
             }
         }
         println!(
-            "points {} probability {} step {}: {evaluations} nudges, {improved} improved, {unchanged} left the design unchanged; figure {:.4} -> {:.4}",
+            "points {} probability {} step {} insertion {}: {evaluations} nudges, {improved} improved, {unchanged} left the design unchanged; figure {:.4} -> {:.4}",
             local.points,
             local.probability,
             local.step,
+            local.insertion,
             figure(&start),
             figure(&best_outcome)
         );

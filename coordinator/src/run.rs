@@ -91,6 +91,7 @@ pub fn run(
         limits: scene.limits().clone(),
         material_count: scene.palette().len(),
         variation: raw.search.variation(),
+        scene: scene.clone(),
     };
     let schedule = &raw.resolution;
     let mut writer = ResultWriter::create(config)?;
@@ -184,7 +185,7 @@ pub fn run(
             .map(|(i, island)| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
                 let count = (raw.search.children_per_epoch as u64).min(share) as usize;
-                island.breed(count, &breeding)
+                island.breed(count, &breeding, dims)
             })
             .collect();
         let genomes: Vec<Vec<Genome>> = children

@@ -8,10 +8,14 @@ use amorph::genome::{
     CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate,
     random_genome,
 };
-use amorph::task::Outcome;
+use std::sync::Arc;
+
+use amorph::task::{Outcome, Scene};
+use amorph::voxel::GridDims;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
+use super::insertion::BoundarySite;
 use super::variation::Variation;
 use crate::ids::{IslandId, TaskId};
 
@@ -42,6 +46,8 @@ pub struct Breeding {
     pub material_count: usize,
     /// Policies beyond the paper's operators (all off by default).
     pub variation: Variation,
+    /// The task, for variation that looks at the design a genome makes (boundary insertion).
+    pub scene: Arc<Scene>,
 }
 
 #[derive(Debug)]
@@ -88,8 +94,9 @@ impl Island {
 
     /// Breeds `count` children from the current snapshot: two distinct random parents, a cut
     /// plane, the dominant parent, then mutation; the last few are nudges of the best when a local
-    /// search is configured. The mutation step first adapts to the last epoch's success.
-    pub fn breed(&mut self, count: usize, breeding: &Breeding) -> Vec<Child> {
+    /// search is configured (some of them point insertions on the best's design at `dims`, the
+    /// run's current resolution). The mutation step first adapts to the last epoch's success.
+    pub fn breed(&mut self, count: usize, breeding: &Breeding, dims: GridDims) -> Vec<Child> {
         let (replaced, tried) = self.last_success;
         self.step_scale =
             breeding
@@ -107,9 +114,11 @@ impl Island {
             .collect();
         let best = self.best_index();
         let local = &breeding.variation.local_search;
+        let site = (nudges > 0 && local.insertion > 0.0)
+            .then(|| BoundarySite::new(&self.population[best].genome, &breeding.scene, dims));
         for _ in 0..nudges {
             let mut genome = self.population[best].genome.clone();
-            local.nudge(&mut genome, &mut self.rng, &breeding.limits);
+            local.step_from_best(&mut genome, &mut self.rng, site.as_ref(), &breeding.scene);
             children.push(Child {
                 genome,
                 dominant_parent: best,
@@ -278,12 +287,17 @@ mod tests {
         assert_eq!(isl.population[1].task, TaskId(2));
     }
 
+    const DIMS: GridDims = GridDims::new(6, 20, 6);
+
     fn breeding(variation: Variation) -> Breeding {
         Breeding {
             mutation: MutationParams::default(),
             limits: GenomeLimits::default(),
             material_count: 2,
             variation,
+            scene: Arc::new(
+                toml::from_str("kind = \"beam\"\ntarget = \"circular_arc\"").expect("a beam"),
+            ),
         }
     }
 
@@ -299,10 +313,11 @@ mod tests {
                 points: 0,
                 probability: 1.0,
                 step: 0.01,
+                insertion: 0.0,
             },
             ..Default::default()
         });
-        let children = isl.breed(6, &b);
+        let children = isl.breed(6, &b, DIMS);
         assert_eq!(children.iter().filter(|c| c.nudge).count(), 3);
         assert!(children[..3].iter().all(|c| !c.nudge), "nudges come last");
         for c in &children[3..] {
@@ -333,7 +348,7 @@ mod tests {
                 },
                 ..Default::default()
             });
-            for c in isl.breed(8, &b) {
+            for c in isl.breed(8, &b, DIMS) {
                 assert!(c.nudge);
                 assert_eq!(c.genome.len(), best.len());
                 let moved: Vec<_> = c
@@ -380,12 +395,12 @@ mod tests {
                 (TaskId(3), scored(-0.5)),
             ],
         );
-        isl.breed(1, &b);
+        isl.breed(1, &b, DIMS);
         assert_eq!(isl.step_scale(), 1.2);
         // Then an epoch with only failures shrinks it back.
         let children = vec![child(0, 0.1)];
         isl.apply(children, vec![(TaskId(4), failed())]);
-        isl.breed(1, &b);
+        isl.breed(1, &b, DIMS);
         assert_eq!(isl.step_scale(), 1.0);
     }
 }

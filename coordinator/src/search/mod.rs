@@ -4,6 +4,7 @@
 mod diversity;
 #[cfg(test)]
 mod fixtures;
+mod insertion;
 mod island;
 mod migration;
 mod resolution;
@@ -12,6 +13,7 @@ mod variation;
 pub use diversity::{
     DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
 };
+pub use insertion::BoundarySite;
 pub use island::{Breeding, Child, Individual, Island};
 pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,

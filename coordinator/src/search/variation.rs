@@ -9,6 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::insertion::BoundarySite;
+
 /// A (1+λ) evolution strategy inside crowding: some children of every epoch are the island's best
 /// design with its continuous parameters nudged (no crossover, no material change, no point added
 /// or removed). Their dominant parent is the best's slot, so crowding keeps a nudge only if it is
@@ -27,6 +29,9 @@ pub struct LocalSearchParams {
     /// Standard deviation of a nudge, as a fraction of the parameter's range (0.02 of the beam's
     /// length is 0.8 of a voxel along it at 12x40x12).
     pub step: f64,
+    /// Share of the nudges that instead add one narrow point at a random voxel on the best's
+    /// design boundary, giving that voxel another state (see `search::insertion`).
+    pub insertion: f64,
 }
 
 impl Default for LocalSearchParams {
@@ -36,6 +41,7 @@ impl Default for LocalSearchParams {
             points: 1,
             probability: 0.2,
             step: 0.02,
+            insertion: 0.0,
         }
     }
 }
@@ -46,17 +52,27 @@ impl LocalSearchParams {
         ((self.fraction * count as f64).round() as usize).min(count)
     }
 
-    /// Nudges `genome` (a copy of the island's best) as configured.
-    pub fn nudge<R: rand::Rng + ?Sized>(
+    /// Moves `genome`, a copy of the island's best, as configured: with probability `insertion`
+    /// a point inserted at `site` (the best's design; `None` when insertion is off), else a nudge.
+    /// The insertion draw is skipped when it is off, so earlier configs keep their RNG stream.
+    pub fn step_from_best<R: rand::Rng + ?Sized>(
         &self,
         genome: &mut amorph::genome::Genome,
         rng: &mut R,
-        limits: &amorph::genome::GenomeLimits,
+        site: Option<&BoundarySite>,
+        scene: &amorph::task::Scene,
     ) {
+        let inserted = site.is_some_and(|site| {
+            rand::RngExt::random_bool(rng, self.insertion)
+                && site.insert(genome, rng, scene).is_some()
+        });
+        if inserted {
+            return;
+        }
         if self.points == 0 {
-            amorph::genome::perturb(genome, rng, self.probability, self.step, limits);
+            amorph::genome::perturb(genome, rng, self.probability, self.step, scene.limits());
         } else {
-            amorph::genome::perturb_points(genome, rng, self.points, self.step, limits);
+            amorph::genome::perturb_points(genome, rng, self.points, self.step, scene.limits());
         }
     }
 }
@@ -156,6 +172,9 @@ impl Variation {
         }
         if !unit(l.probability) {
             return Err("search.local_search.probability must be in [0, 1]".into());
+        }
+        if !unit(l.insertion) {
+            return Err("search.local_search.insertion must be in [0, 1]".into());
         }
         if !(l.step.is_finite() && l.step > 0.0) {
             return Err("search.local_search.step must be a positive number".into());
