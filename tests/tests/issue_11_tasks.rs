@@ -48,6 +48,8 @@ initial_points = 40
 interval = 3
 [search.local_search]
 fraction = 0.25
+points = 0
+step = 0.005
 [budget]
 evaluations = 6000
 [resolution]
