@@ -110,7 +110,11 @@ fn capacity() {
         while queue.stats().workers < workers {
             std::thread::sleep(Duration::from_millis(10));
         }
-        let mut evaluator = ClusterEvaluator::new(queue.clone(), Arc::new(AtomicBool::new(false)));
+        let mut evaluator = ClusterEvaluator::new(
+            queue.clone(),
+            Arc::new(AtomicBool::new(false)),
+            Arc::new(scene.clone()),
+        );
         let batch = if slots == 1 { 2_000 } else { 20_000 };
         // Warm-up batch, then the best of three.
         let mut best = f64::INFINITY;

@@ -15,13 +15,12 @@
 //! the figure.
 
 use amorph::genome::Genome;
-use amorph::material::MaterialId;
 use amorph::task::Outcome;
 use amorph::task::{Scene, Task};
 use amorph::voxel::GridDims;
 use amorph::voxel::VoxelGrid;
 use amorph_coordinator::RunConfig;
-use amorph_coordinator::search::{BoundarySite, LocalSearchParams};
+use amorph_coordinator::search::{BoundarySite, LocalSearchParams, other_state};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -72,10 +71,12 @@ fn main() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let (mut best, mut best_outcome) = (genome.clone(), start.clone());
         let mut best_design = scene.design(&best, dims);
+        let site_of =
+            |g: &Genome| (local.insertion > 0.0).then(|| BoundarySite::new(g, scene, dims));
+        let mut site = site_of(&best);
         let (mut improved, mut unchanged) = (0, 0);
         for _ in 0..evaluations {
             let mut child = best.clone();
-            let site = (local.insertion > 0.0).then(|| BoundarySite::new(&best, scene, dims));
             local.step_from_best(&mut child, &mut rng, site.as_ref(), scene);
             let design = scene.design(&child, dims);
             if design == best_design {
@@ -84,6 +85,7 @@ fn main() {
             }
             let outcome = scene.evaluate(&child, dims);
             if outcome.is_fitter_than(&best_outcome) {
+                site = site_of(&child);
                 (best, best_outcome, best_design) = (child, outcome, design);
                 improved += 1;
             }
@@ -113,19 +115,10 @@ fn voxel_climb(
     let mut best_outcome = start.clone();
     let (mut improved, mut unchanged) = (0, 0);
     for _ in 0..evaluations {
-        let boundary: Vec<usize> = (0..dims.cell_count())
-            .filter(|&i| {
-                dims.neighbourhood(i)
-                    .any(|j| best.cells()[j] != best.cells()[i])
-            })
-            .collect();
+        let boundary = best.boundary_cells();
         let i = boundary[rng.random_range(0..boundary.len())];
-        let states: Vec<Option<MaterialId>> = std::iter::once(None)
-            .chain((0..materials).map(|m| Some(MaterialId(m as u8))))
-            .filter(|&s| s != best.cells()[i])
-            .collect();
         let mut cells = best.cells().to_vec();
-        cells[i] = states[rng.random_range(0..states.len())];
+        cells[i] = other_state(cells[i], materials, &mut rng);
         let candidate = VoxelGrid::from_cells(dims, cells);
         let kept = match scene {
             Scene::Beam(beam) => beam.keep(&candidate),

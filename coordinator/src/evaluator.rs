@@ -9,7 +9,7 @@ use amorph::genome::Genome;
 use amorph::task::{Outcome, Scene};
 use amorph::voxel::GridDims;
 
-use crate::ids::TaskId;
+use crate::ids::{TaskId, WorkerId};
 
 /// One genome to evaluate at one resolution of the run's scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +30,40 @@ pub struct Completion {
     pub worker: String,
     /// Wall time of the evaluation where it ran, s.
     pub wall_seconds: f64,
+    /// Whose word the outcome is.
+    pub origin: Origin,
+}
+
+/// Whose word an outcome is, which decides whether it must be checked before it may change a
+/// population.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// Evaluated in this process (its threads, its own local workers, or the coordinator).
+    Trusted,
+    /// Reported by an outside worker: a claim until a second evaluation agrees.
+    Claim(WorkerId),
+    /// No evaluation: `max_attempts` different workers gave errors, so the task failed.
+    GaveUp,
+}
+
+/// An outside worker's outcome for a task, to be evaluated again elsewhere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Claim {
+    pub task: Task,
+    pub outcome: Outcome,
+    pub claimant: WorkerId,
+}
+
+/// What a check found: the outcome that holds and who was caught disagreeing with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Verdict {
+    pub outcome: Outcome,
+    /// Whether the second evaluation agreed with the claim to the bit.
+    pub agreed: bool,
+    /// Who made the second evaluation (and the third, when a tie had to be broken).
+    pub checker: String,
+    /// Workers whose outcome for this task differs from the one that holds; now quarantined.
+    pub liars: Vec<WorkerId>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -38,15 +72,36 @@ pub enum EvaluatorError {
     Stopped(String),
 }
 
-/// Evaluates a batch of tasks and returns their outcomes in task order. `on_done` is called once
-/// per finished task as it finishes (from the calling thread or any other), so the run store can
-/// record it at once.
+/// Evaluates a batch of tasks and returns their completions in task order. `on_done` is called
+/// once per finished task as it finishes (from the calling thread or any other), so the run store
+/// can record it at once.
 pub trait Evaluator {
     fn evaluate(
         &mut self,
         tasks: &[Task],
         on_done: &(dyn Fn(&Task, &Completion) + Sync),
-    ) -> Result<Vec<Outcome>, EvaluatorError>;
+    ) -> Result<Vec<Completion>, EvaluatorError>;
+
+    /// Evaluates each claim again by someone other than its claimant and returns, in order, the
+    /// outcome that holds. An evaluator whose completions are all [`Origin::Trusted`] is never
+    /// asked; by default it answers with the claims themselves.
+    fn check(&mut self, claims: &[Claim]) -> Result<Vec<Verdict>, EvaluatorError> {
+        Ok(claims
+            .iter()
+            .map(|c| Verdict {
+                outcome: c.outcome.clone(),
+                agreed: true,
+                checker: "none".into(),
+                liars: Vec::new(),
+            })
+            .collect())
+    }
+
+    /// Whether `worker` was caught disagreeing with a check (its other outcomes are then checked
+    /// too before they count).
+    fn is_quarantined(&self, _worker: WorkerId) -> bool {
+        false
+    }
 
     /// A one-line state of the evaluator for progress lines (workers, leases), if it has one.
     fn status(&self) -> Option<String> {
@@ -87,10 +142,10 @@ impl Evaluator for LocalEvaluator {
         &mut self,
         tasks: &[Task],
         on_done: &(dyn Fn(&Task, &Completion) + Sync),
-    ) -> Result<Vec<Outcome>, EvaluatorError> {
+    ) -> Result<Vec<Completion>, EvaluatorError> {
         let next = AtomicUsize::new(0);
         let scene = &*self.scene;
-        let mut done: Vec<(usize, Outcome)> = std::thread::scope(|s| {
+        let mut done: Vec<Completion> = std::thread::scope(|s| {
             let workers: Vec<_> = (0..self.threads.min(tasks.len()))
                 .map(|_| {
                     s.spawn(|| {
@@ -104,9 +159,10 @@ impl Evaluator for LocalEvaluator {
                                 outcome: scene.evaluate(&task.genome, task.dims),
                                 worker: "local".into(),
                                 wall_seconds: started.elapsed().as_secs_f64(),
+                                origin: Origin::Trusted,
                             };
                             on_done(task, &completion);
-                            mine.push((i, completion.outcome));
+                            mine.push(completion);
                         }
                         mine
                     })
@@ -117,7 +173,7 @@ impl Evaluator for LocalEvaluator {
                 .flat_map(|w| w.join().expect("evaluation threads catch panics"))
                 .collect()
         });
-        done.sort_by_key(|&(i, _)| i);
-        Ok(done.into_iter().map(|(_, o)| o).collect())
+        done.sort_by_key(|c| c.slot);
+        Ok(done)
     }
 }

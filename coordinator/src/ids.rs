@@ -10,6 +10,17 @@ pub struct IslandId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct TaskId(pub u64);
 
+impl TaskId {
+    /// First id of the check tasks (a second evaluation of an outside worker's outcome). The
+    /// search's own ids count up from 1 and never get near it, so checks leave them, and with them
+    /// the run store's replay, exactly as a run without checks numbers them.
+    pub const FIRST_CHECK: u64 = 1 << 62;
+
+    pub fn is_check(self) -> bool {
+        self.0 >= Self::FIRST_CHECK
+    }
+}
+
 impl std::fmt::Display for IslandId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "island-{}", self.0)

@@ -11,7 +11,7 @@ use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
 use tokio::sync::watch;
 use tracing::{info, warn};
 
-use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue};
+use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Trust};
 use crate::config::RunConfig;
 use crate::progress::Progress;
 use crate::run::{RunContext, RunError, run};
@@ -106,10 +106,16 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     // Listen before touching the run store, so a port in use leaves no store behind to demand
     // --resume or --fresh on the retry.
     let queue = Arc::new(TaskQueue::new(settings.rules.clone()));
+    let trust = if settings.verify {
+        Trust::local()
+    } else {
+        Trust::Everyone
+    };
     let server_options = ServerOptions {
         listen: settings.listen.clone(),
         token: token.clone(),
         tls: settings.tls.clone(),
+        trust: trust.clone(),
     };
     let server = runtime.block_on(cluster::start(
         &server_options,
@@ -140,6 +146,7 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
             let mut opts = WorkerOptions::new(url.clone(), settings.local_worker_threads);
             opts.name = format!("local-{i}");
             opts.token = token.clone();
+            opts.local_key = trust.local_key().map(str::to_owned);
             opts.mode = EvaluationMode::Physics;
             opts.exit_when_finished = true;
             // The coordinator waits only briefly for its own workers when it stops.
@@ -155,13 +162,26 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
         .collect();
     info!(%url, local_workers = local, store = %store.path().display(), "coordinator ready");
 
-    let mut evaluator = ClusterEvaluator::new(queue.clone(), options.shutdown.clone());
+    let mut evaluator = ClusterEvaluator::new(
+        queue.clone(),
+        options.shutdown.clone(),
+        Arc::new(config.raw.scene.clone()),
+    );
     let ctx = RunContext {
         store: &store,
         shutdown: &options.shutdown,
         progress: &options.progress,
     };
     let result = run(config, &mut evaluator, &ctx);
+    let checks = evaluator.check_stats();
+    if checks.checks > 0 {
+        info!(
+            checks = checks.checks,
+            by_coordinator = checks.by_coordinator,
+            disagreements = checks.disagreements,
+            "verification: outside workers' outcomes checked by a second evaluation"
+        );
+    }
 
     // Wind down. Only a run that ended tells workers it finished (so they exit): after a stop or
     // a failure the run is not over, and external workers should wait to serve its resumption.

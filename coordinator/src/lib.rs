@@ -13,6 +13,7 @@ pub mod run;
 pub mod search;
 pub mod store;
 pub mod summary;
+pub mod verification;
 
 pub use config::RunConfig;
 pub use evaluator::{Evaluator, LocalEvaluator, Task};

@@ -14,7 +14,7 @@ use rand_chacha::ChaCha8Rng;
 use tracing::info;
 
 use crate::config::RunConfig;
-use crate::evaluator::{Completion, Evaluator, EvaluatorError, Task};
+use crate::evaluator::{Completion, Evaluator, EvaluatorError, Origin, Task};
 use crate::ids::{IslandId, TaskId};
 use crate::progress::Progress;
 use crate::results::ResultWriter;
@@ -23,6 +23,7 @@ use crate::store::{
     EpochRecord, EvaluationRecord, MigrationRecord, Purpose, RunStore, StoreError, StoredEvaluation,
 };
 use crate::summary::{HistoryRow, RunSummary, StopReason, fittest};
+use crate::verification::{self, Decisive, EARLIER_SESSION, Evaluated, VerificationError};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -34,6 +35,15 @@ pub enum RunError {
     Store(#[from] StoreError),
     #[error("resume: {0}")]
     Replay(String),
+}
+
+impl From<VerificationError> for RunError {
+    fn from(e: VerificationError) -> Self {
+        match e {
+            VerificationError::Evaluator(e) => Self::Evaluator(e),
+            VerificationError::Store(e) => Self::Store(e),
+        }
+    }
 }
 
 /// What a run needs besides its config and evaluator.
@@ -88,8 +98,6 @@ pub fn run(
     let scene = Arc::new(raw.scene.clone());
     let breeding = Breeding {
         mutation: raw.search.mutation.clone(),
-        limits: scene.limits().clone(),
-        material_count: scene.palette().len(),
         variation: raw.search.variation(),
         scene: scene.clone(),
     };
@@ -139,13 +147,21 @@ pub fn run(
         },
     };
     let dims = schedule.dims(0);
-    let outcomes = evaluate_all(
+    let batch = evaluate_all(
         &mut search,
         evaluator,
         &initial,
         dims,
         Purpose::Initial,
         ctx,
+    )?;
+    let outcomes = settle(
+        batch,
+        &initial,
+        dims,
+        evaluator,
+        ctx,
+        &verification::all_decide,
     )?;
     search.islands = initial
         .into_iter()
@@ -192,7 +208,21 @@ pub fn run(
             .iter()
             .map(|c| c.iter().map(|c| c.genome.clone()).collect())
             .collect();
-        let outcomes = evaluate_all(&mut search, evaluator, &genomes, dims, Purpose::Child, ctx)?;
+        let batch = evaluate_all(&mut search, evaluator, &genomes, dims, Purpose::Child, ctx)?;
+        // A child's outcome decides when it would replace its dominant parent.
+        let winners = |batch: &[Vec<Evaluated>]| -> Vec<Vec<bool>> {
+            search
+                .islands
+                .iter()
+                .zip(&children)
+                .zip(batch)
+                .map(|((island, children), group)| {
+                    let outcomes: Vec<&Outcome> = group.iter().map(|e| &e.outcome).collect();
+                    island.winners(children, &outcomes)
+                })
+                .collect()
+        };
+        let outcomes = settle(batch, &genomes, dims, evaluator, ctx, &winners)?;
         search.epoch += 1;
         let wall = search.clock.seconds();
         for ((island, children), outcomes) in search.islands.iter_mut().zip(children).zip(outcomes)
@@ -277,13 +307,21 @@ pub fn run(
                 .iter()
                 .map(|i| i.population.iter().map(|ind| ind.genome.clone()).collect())
                 .collect();
-            let outcomes = evaluate_all(
+            let batch = evaluate_all(
                 &mut search,
                 evaluator,
                 &genomes,
                 dims,
                 Purpose::Reevaluation,
                 ctx,
+            )?;
+            let outcomes = settle(
+                batch,
+                &genomes,
+                dims,
+                evaluator,
+                ctx,
+                &verification::all_decide,
             )?;
             for (island, outcomes) in search.islands.iter_mut().zip(outcomes) {
                 for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
@@ -348,7 +386,8 @@ fn stop_reason(
 
 /// Evaluates one batch of genomes per island as a single evaluator call, returning the outcomes
 /// (with their task ids) grouped the same way. Tasks whose outcome a resumed run's store already
-/// holds take it from there; every new outcome is stored the moment it arrives.
+/// holds take it from there; every new outcome is stored the moment it arrives. Outside workers'
+/// outcomes are still claims: [`settle`] them before use.
 fn evaluate_all(
     search: &mut Search,
     evaluator: &mut dyn Evaluator,
@@ -356,7 +395,7 @@ fn evaluate_all(
     dims: GridDims,
     purpose: Purpose,
     ctx: &RunContext<'_>,
-) -> Result<Vec<Vec<(TaskId, Outcome)>>> {
+) -> Result<Vec<Vec<Evaluated>>> {
     let epoch = match purpose {
         Purpose::Child => search.epoch + 1,
         Purpose::Initial | Purpose::Reevaluation => search.epoch,
@@ -376,7 +415,7 @@ fn evaluate_all(
         }
     }
 
-    let mut outcomes: Vec<Option<Outcome>> = vec![None; tasks.len()];
+    let mut evaluated: Vec<Option<Evaluated>> = vec![None; tasks.len()];
     let mut fresh = Vec::new();
     let mut fresh_slots = Vec::new();
     for (slot, task) in tasks.iter().enumerate() {
@@ -386,7 +425,11 @@ fn evaluate_all(
         });
         match stored {
             Some(s) => {
-                outcomes[slot] = Some(s.outcome);
+                evaluated[slot] = Some(Evaluated {
+                    task: task.id,
+                    outcome: s.outcome,
+                    claimant: s.unchecked.then_some(EARLIER_SESSION),
+                });
                 ctx.progress.evaluated();
             }
             None => {
@@ -410,6 +453,7 @@ fn evaluate_all(
                 outcome: &done.outcome,
                 worker: &done.worker,
                 wall_seconds: done.wall_seconds,
+                unchecked: matches!(done.origin, Origin::Claim(_)),
             };
             if let Err(e) = ctx.store.record_evaluation(&record) {
                 let mut first = store_error.lock().unwrap_or_else(|e| e.into_inner());
@@ -420,8 +464,15 @@ fn evaluate_all(
         if let Some(e) = store_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
             return Err(e.into());
         }
-        for (slot, outcome) in fresh_slots.iter().zip(results) {
-            outcomes[*slot] = Some(outcome);
+        for (slot, done) in fresh_slots.iter().zip(results) {
+            evaluated[*slot] = Some(Evaluated {
+                task: tasks[*slot].id,
+                outcome: done.outcome,
+                claimant: match done.origin {
+                    Origin::Claim(w) => Some(w),
+                    Origin::Trusted | Origin::GaveUp => None,
+                },
+            });
         }
         for (task, worker, message) in evaluator.take_worker_errors() {
             ctx.store.record_task_error(task.0, &worker, &message)?;
@@ -429,13 +480,43 @@ fn evaluate_all(
     }
     search.evaluations += tasks.len() as u64;
 
-    let mut outcomes = tasks
-        .iter()
-        .zip(outcomes)
-        .map(|(task, o)| (task.id, o.expect("every task has an outcome")));
+    let mut evaluated = evaluated
+        .into_iter()
+        .map(|e| e.expect("every task has an outcome"));
     Ok(genomes
         .iter()
-        .map(|g| outcomes.by_ref().take(g.len()).collect())
+        .map(|g| evaluated.by_ref().take(g.len()).collect())
+        .collect())
+}
+
+/// The outcomes of a batch once every outside worker's claim that `decisive` marks is checked
+/// (`verification.rs`), each check recorded in the run store.
+fn settle(
+    mut batch: Vec<Vec<Evaluated>>,
+    genomes: &[Vec<Genome>],
+    dims: GridDims,
+    evaluator: &mut dyn Evaluator,
+    ctx: &RunContext<'_>,
+    decisive: Decisive<'_>,
+) -> Result<Vec<Vec<(TaskId, Outcome)>>> {
+    verification::confirm(
+        &mut batch,
+        genomes,
+        dims,
+        evaluator,
+        decisive,
+        &mut |claim, verdict| {
+            ctx.store.record_check(
+                claim.task.id.0,
+                &claim.claimant.to_string(),
+                &claim.outcome,
+                verdict,
+            )
+        },
+    )?;
+    Ok(batch
+        .into_iter()
+        .map(|g| g.into_iter().map(|e| (e.task, e.outcome)).collect())
         .collect())
 }
 

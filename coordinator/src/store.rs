@@ -15,6 +15,12 @@
 //!   genome is the evaluation's, by task id, so snapshots cost a few bytes per individual).
 //! - `migration(epoch, from_island, to_island, emigrant_slot, replaced_slot, task_id)`.
 //! - `task_error(task_id, worker, message)`: a worker's error for a task, noted before a retry.
+//! - `unchecked(task_id)`: evaluations that are an outside worker's claim not yet checked (a resumed
+//!   run checks them before they count; see `verification.rs`).
+//! - `verification(task_id, claimant, checker, agreed, claimed, finished_unix)`: each check of a
+//!   claim; where it disagreed, `claimed` keeps the claim and the evaluation row holds the outcome
+//!   that held.
+//! - `quarantine(worker, task_id, finished_unix)`: a worker caught disagreeing, and on which task.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -81,6 +87,8 @@ pub struct EvaluationRecord<'a> {
     pub outcome: &'a Outcome,
     pub worker: &'a str,
     pub wall_seconds: f64,
+    /// An outside worker's claim, not yet checked.
+    pub unchecked: bool,
 }
 
 /// A stored outcome, to be reused by a resumed run if its task draws the same genome again.
@@ -89,6 +97,8 @@ pub struct StoredEvaluation {
     pub genome_json: String,
     pub resolution: String,
     pub outcome: Outcome,
+    /// An outside worker's claim that was never checked: the resumed run checks it if it decides.
+    pub unchecked: bool,
 }
 
 #[derive(Debug)]
@@ -201,11 +211,13 @@ impl RunStore {
         };
         // WAL: readers (a user's sqlite3 shell) never block the run; NORMAL sync keeps every
         // committed row across a crash of this process (not across a power cut, which is the
-        // price of not syncing each evaluation to disk).
+        // price of not syncing each evaluation to disk). The verification tables are created on
+        // open, so a store written before they existed resumes with them empty.
         store.with(|c| {
             c.pragma_update(None, "journal_mode", "WAL")?;
             c.pragma_update(None, "synchronous", "NORMAL")?;
             c.busy_timeout(std::time::Duration::from_secs(10))?;
+            c.execute_batch(VERIFICATION_SCHEMA)?;
             Ok(())
         })?;
         Ok(store)
@@ -226,11 +238,10 @@ impl RunStore {
     pub fn record_evaluation(&self, r: &EvaluationRecord<'_>) -> Result<()> {
         let genome = serde_json::to_string(r.genome).expect("genomes serialize");
         let outcome = serde_json::to_string(r.outcome).expect("outcomes serialize");
-        let finished = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64());
+        let finished = unix_now();
         self.with(|c| {
-            c.prepare_cached(
+            let tx = c.transaction()?;
+            tx.prepare_cached(
                 "INSERT OR REPLACE INTO evaluation(task_id, epoch, island, purpose, resolution, genome, outcome, fitness, worker, wall_seconds, finished_unix)
                  VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
             )?
@@ -247,8 +258,74 @@ impl RunStore {
                 r.wall_seconds,
                 finished
             ])?;
-            Ok(())
+            if r.unchecked {
+                tx.execute(
+                    "INSERT OR REPLACE INTO unchecked(task_id) VALUES (?1)",
+                    [r.task_id as i64],
+                )?;
+            }
+            tx.commit()
         })
+    }
+
+    /// Records a check of the claim for `task_id`: the verdict, the outcome that holds in place of
+    /// a contradicted claim, and the quarantine of every worker caught disagreeing.
+    pub fn record_check(
+        &self,
+        task_id: u64,
+        claimant: &str,
+        claimed: &Outcome,
+        verdict: &crate::evaluator::Verdict,
+    ) -> Result<()> {
+        let finished = unix_now();
+        let claimed = serde_json::to_string(claimed).expect("outcomes serialize");
+        let held = serde_json::to_string(&verdict.outcome).expect("outcomes serialize");
+        self.with(|c| {
+            let tx = c.transaction()?;
+            tx.execute(
+                "INSERT INTO verification(task_id, claimant, checker, agreed, claimed, finished_unix) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
+                params![task_id as i64, claimant, verdict.checker, verdict.agreed, claimed, finished],
+            )?;
+            if !verdict.agreed {
+                tx.execute(
+                    "UPDATE evaluation SET outcome = ?2, fitness = ?3, worker = ?4 WHERE task_id = ?1",
+                    params![task_id as i64, held, verdict.outcome.fitness(), verdict.checker],
+                )?;
+            }
+            for liar in &verdict.liars {
+                tx.execute(
+                    "INSERT INTO quarantine(worker, task_id, finished_unix) VALUES (?1, ?2, ?3)",
+                    params![liar.to_string(), task_id as i64, finished],
+                )?;
+            }
+            tx.execute("DELETE FROM unchecked WHERE task_id = ?1", [task_id as i64])?;
+            tx.commit()
+        })
+    }
+
+    /// Checks a store holds, read without opening it for writing (a run may be going on):
+    /// (checks, checks that disagreed, distinct workers quarantined).
+    pub fn peek_verification(path: &Path) -> Result<(u64, u64, u64)> {
+        let sqlite = |source| StoreError::Sqlite {
+            path: path.to_owned(),
+            source,
+        };
+        let conn = Connection::open_with_flags(path, rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY)
+            .map_err(sqlite)?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(sqlite)?;
+        conn.query_row(
+            "SELECT (SELECT count(*) FROM verification), (SELECT count(*) FROM verification WHERE NOT agreed), (SELECT count(DISTINCT worker) FROM quarantine)",
+            [],
+            |r| {
+                Ok((
+                    r.get::<_, i64>(0)? as u64,
+                    r.get::<_, i64>(1)? as u64,
+                    r.get::<_, i64>(2)? as u64,
+                ))
+            },
+        )
+        .map_err(sqlite)
     }
 
     pub fn record_task_error(&self, task_id: u64, worker: &str, message: &str) -> Result<()> {
@@ -315,16 +392,19 @@ impl RunStore {
 
     /// Every stored evaluation by task id, for a resumed run's replay.
     pub fn evaluations(&self) -> Result<HashMap<u64, StoredEvaluation>> {
-        let rows: Vec<(i64, String, String, String)> = self.with(|c| {
-            let mut stmt =
-                c.prepare("SELECT task_id, genome, resolution, outcome FROM evaluation")?;
+        let rows: Vec<(i64, String, String, String, bool)> = self.with(|c| {
+            let mut stmt = c.prepare(
+                "SELECT task_id, genome, resolution, outcome, task_id IN (SELECT task_id FROM unchecked) FROM evaluation",
+            )?;
             let rows = stmt
-                .query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)))?
+                .query_map([], |r| {
+                    Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?, r.get(4)?))
+                })?
                 .collect::<rusqlite::Result<Vec<_>>>()?;
             Ok(rows)
         })?;
         rows.into_iter()
-            .map(|(id, genome_json, resolution, outcome)| {
+            .map(|(id, genome_json, resolution, outcome, unchecked)| {
                 let id = u64::try_from(id).map_err(|_| StoreError::Corrupt {
                     path: self.path.clone(),
                     message: format!("table evaluation, row task_id {id}: negative task id"),
@@ -339,6 +419,7 @@ impl RunStore {
                         genome_json,
                         resolution,
                         outcome,
+                        unchecked,
                     },
                 ))
             })
@@ -500,6 +581,25 @@ CREATE TABLE migration (
 CREATE INDEX migration_epoch ON migration(epoch);
 CREATE TABLE task_error (task_id INTEGER NOT NULL, worker TEXT NOT NULL, message TEXT NOT NULL);
 ";
+
+const VERIFICATION_SCHEMA: &str = "
+CREATE TABLE IF NOT EXISTS unchecked (task_id INTEGER PRIMARY KEY);
+CREATE TABLE IF NOT EXISTS verification (
+    task_id INTEGER NOT NULL,
+    claimant TEXT NOT NULL,
+    checker TEXT NOT NULL,
+    agreed INTEGER NOT NULL,
+    claimed TEXT NOT NULL,
+    finished_unix REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS quarantine (worker TEXT NOT NULL, task_id INTEGER NOT NULL, finished_unix REAL NOT NULL);
+";
+
+fn unix_now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
 
 fn config_text(config: &RunConfig) -> String {
     toml::to_string(&config.raw).expect("configs serialize")

@@ -382,3 +382,76 @@ fn regression_a_failed_bind_leaves_no_run_store_and_says_why_once() {
         "no store left behind"
     );
 }
+
+/// Issue 12, item 3: a worker with the token reports outcomes the scene *can* produce, but for
+/// other designs: each task it holds gets the honest outcome of another (every number passes the
+/// plausibility check). Before verification such an outcome entered the population and changed the
+/// run's result. Now every outside worker's outcome that would change a population is evaluated
+/// again elsewhere (here by the coordinator itself, the only other evaluator at first); the
+/// disagreement is settled by the coordinator's own evaluation, the liar is quarantined (its calls
+/// refused with PERMISSION_DENIED, a row in the run store) and the run ends as a clean run.
+#[test]
+fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("hostile-plausible"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let honest = runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, 12, "liar").await;
+        let held = lease(&mut c, &liar, 12).await;
+        let mut truths = Vec::new();
+        for task in &held {
+            truths.push(evaluate(&mut c, task).await);
+        }
+        let mut forged = 0;
+        for (k, task) in held.iter().enumerate() {
+            // Another design's outcome where one differs (many random designs fail alike).
+            let claim = truths
+                .iter()
+                .find(|t| **t != truths[k])
+                .unwrap_or(&truths[k]);
+            forged += usize::from(*claim != truths[k]);
+            let r = c
+                .report(report(
+                    &liar,
+                    task.task_id,
+                    task_result::Result::Outcome(claim.clone()),
+                ))
+                .await
+                .unwrap()
+                .into_inner();
+            assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
+        }
+        assert!(forged > 0, "the designs all score alike: nothing to forge");
+        let honest = TestWorker::start(&run.url(), 2, None);
+        let start = Instant::now();
+        loop {
+            let r = c
+                .lease(v1::LeaseRequest {
+                    worker_id: liar.clone(),
+                    max_tasks: 0,
+                    wait_ms: 0,
+                })
+                .await;
+            match r {
+                Err(s) if s.code() == Code::PermissionDenied => break,
+                _ => assert!(
+                    start.elapsed() < Duration::from_secs(60),
+                    "never quarantined"
+                ),
+            }
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        honest
+    });
+    let store = run.store.clone();
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+    let (checks, disagreed, quarantined) =
+        amorph_coordinator::store::RunStore::peek_verification(&store).unwrap();
+    assert!(
+        checks >= 4 && disagreed >= 1,
+        "{checks} checks, {disagreed} disagreed"
+    );
+    assert_eq!(quarantined, 1);
+}

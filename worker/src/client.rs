@@ -40,6 +40,9 @@ pub struct WorkerOptions {
     pub name: String,
     /// The shared secret, if the coordinator requires one.
     pub token: Option<String>,
+    /// The secret a coordinator gives its own in-process workers, so it takes their outcomes
+    /// without a check.
+    pub local_key: Option<String>,
     /// PEM certificate of the authority that signed the coordinator's certificate (TLS).
     pub ca_cert: Option<PathBuf>,
     /// Name to check the coordinator's certificate against, if not the URL's host.
@@ -68,6 +71,7 @@ impl WorkerOptions {
             threads: threads.max(1),
             name: default_name(),
             token: None,
+            local_key: None,
             ca_cert: None,
             tls_domain: None,
             mode: EvaluationMode::Physics,
@@ -114,15 +118,24 @@ pub struct WorkerSummary {
     pub sessions: u64,
 }
 
+/// Metadata every call carries: the token and, for a coordinator's own workers, its local key.
 #[derive(Clone, Debug)]
-struct Auth(Option<MetadataValue<Ascii>>);
+struct Auth {
+    token: Option<MetadataValue<Ascii>>,
+    local_key: Option<MetadataValue<Ascii>>,
+}
 
 impl Interceptor for Auth {
     fn call(&mut self, mut request: Request<()>) -> Result<Request<()>, Status> {
-        if let Some(token) = &self.0 {
+        if let Some(token) = &self.token {
             request
                 .metadata_mut()
                 .insert(amorph_proto::AUTHORIZATION, token.clone());
+        }
+        if let Some(key) = &self.local_key {
+            request
+                .metadata_mut()
+                .insert(amorph_proto::LOCAL_KEY, key.clone());
         }
         Ok(request)
     }
@@ -184,8 +197,9 @@ pub async fn run_worker(
     mut stop: watch::Receiver<bool>,
 ) -> Result<WorkerSummary, ClientError> {
     let endpoint = endpoint(&opts)?;
-    let auth = Auth(
-        opts.token
+    let auth = Auth {
+        token: opts
+            .token
             .as_deref()
             .map(|t| {
                 format!("Bearer {t}")
@@ -193,7 +207,15 @@ pub async fn run_worker(
                     .map_err(|_| ClientError::Setup("the token must be printable ASCII".into()))
             })
             .transpose()?,
-    );
+        local_key: opts
+            .local_key
+            .as_deref()
+            .map(|k| {
+                k.parse()
+                    .map_err(|_| ClientError::Setup("the local key must be printable ASCII".into()))
+            })
+            .transpose()?,
+    };
     if opts.threads > MAX_THREADS {
         return Err(ClientError::Setup(format!(
             "--threads {}: at most {MAX_THREADS}",

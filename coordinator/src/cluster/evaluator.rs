@@ -1,45 +1,73 @@
 //! The search's view of the cluster: an [`Evaluator`] that puts a batch on the task queue and
-//! waits for its completions, whoever delivers them and in whatever order.
+//! waits for its completions, whoever delivers them and in whatever order, and that checks an
+//! outside worker's claim by a second evaluation elsewhere (verification in the style of volunteer
+//! computing: a worker holding the token can report anything, so its word alone never decides).
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use amorph::task::Outcome;
+use amorph::task::{Outcome, Scene};
+use tracing::{info, warn};
 
 use super::queue::TaskQueue;
-use crate::evaluator::{Completion, Evaluator, EvaluatorError, Task};
-use crate::ids::TaskId;
+use crate::evaluator::{Claim, Completion, Evaluator, EvaluatorError, Origin, Task, Verdict};
+use crate::ids::{TaskId, WorkerId};
 
 #[derive(Debug)]
 pub struct ClusterEvaluator {
     queue: Arc<TaskQueue>,
     shutdown: Arc<AtomicBool>,
+    /// The run's scene, for the evaluations the coordinator makes itself: a check no other
+    /// worker may take, and the tie-break when a check disagrees with a claim.
+    scene: Arc<Scene>,
+    next_check: u64,
+    stats: CheckStats,
+}
+
+/// What verification has cost and found so far in this process.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CheckStats {
+    /// Second evaluations of claims.
+    pub checks: u64,
+    /// Of those, made by the coordinator itself because no other worker could.
+    pub by_coordinator: u64,
+    /// Checks that disagreed with their claim, each settled by the coordinator's own evaluation
+    /// unless a trusted worker had made the check.
+    pub disagreements: u64,
 }
 
 impl ClusterEvaluator {
-    pub fn new(queue: Arc<TaskQueue>, shutdown: Arc<AtomicBool>) -> Self {
-        Self { queue, shutdown }
+    pub fn new(queue: Arc<TaskQueue>, shutdown: Arc<AtomicBool>, scene: Arc<Scene>) -> Self {
+        Self {
+            queue,
+            shutdown,
+            scene,
+            next_check: TaskId::FIRST_CHECK,
+            stats: CheckStats::default(),
+        }
     }
-}
 
-impl Evaluator for ClusterEvaluator {
-    fn evaluate(
+    pub fn check_stats(&self) -> CheckStats {
+        self.stats
+    }
+
+    /// Waits for one completion per task of the batch just submitted on `done`; check tasks that
+    /// no live worker may take are evaluated here.
+    fn collect(
         &mut self,
         tasks: &[Task],
+        done: &std::sync::mpsc::Receiver<Completion>,
         on_done: &(dyn Fn(&Task, &Completion) + Sync),
-    ) -> Result<Vec<Outcome>, EvaluatorError> {
-        let done = self.queue.submit(tasks.to_vec());
-        let mut outcomes: Vec<Option<Outcome>> = vec![None; tasks.len()];
+    ) -> Result<Vec<Completion>, EvaluatorError> {
+        let mut completions: Vec<Option<Completion>> = vec![None; tasks.len()];
         let mut remaining = tasks.len();
         while remaining > 0 {
             match done.recv_timeout(Duration::from_millis(100)) {
                 Ok(completion) => {
                     on_done(&tasks[completion.slot], &completion);
-                    if outcomes[completion.slot]
-                        .replace(completion.outcome)
-                        .is_none()
-                    {
+                    let slot = completion.slot;
+                    if completions[slot].replace(completion).is_none() {
                         remaining -= 1;
                     }
                 }
@@ -51,20 +79,133 @@ impl Evaluator for ClusterEvaluator {
                             tasks.len()
                         )));
                     }
+                    for task in self.queue.orphan_checks(Instant::now()) {
+                        let started = Instant::now();
+                        let outcome = self.scene.evaluate(&task.genome, task.dims);
+                        self.stats.by_coordinator += 1;
+                        self.queue
+                            .finish_here(task.id, outcome, started.elapsed().as_secs_f64());
+                    }
                 }
                 Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
                     return Err(EvaluatorError::Stopped("the task queue closed".into()));
                 }
             }
         }
-        Ok(outcomes.into_iter().map(|o| o.expect("counted")).collect())
+        Ok(completions
+            .into_iter()
+            .map(|c| c.expect("counted"))
+            .collect())
+    }
+
+    /// The outcome that holds when a check disagrees with a claim: a trusted checker's, else the
+    /// coordinator's own evaluation. Everyone whose outcome differs from it is quarantined.
+    fn settle(&mut self, claim: &Claim, check: &Completion) -> Verdict {
+        self.stats.disagreements += 1;
+        let (truth, checker) = match check.origin {
+            Origin::Trusted => (check.outcome.clone(), check.worker.clone()),
+            Origin::Claim(_) | Origin::GaveUp => {
+                self.stats.by_coordinator += 1;
+                let truth = self.scene.evaluate(&claim.task.genome, claim.task.dims);
+                (truth, format!("{}, then coordinator", check.worker))
+            }
+        };
+        let truth_text = outcome_text(&truth);
+        let mut liars = Vec::new();
+        if outcome_text(&claim.outcome) != truth_text {
+            liars.push(claim.claimant);
+        }
+        if let Origin::Claim(w) = check.origin
+            && outcome_text(&check.outcome) != truth_text
+        {
+            liars.push(w);
+        }
+        for &liar in &liars {
+            warn!(worker = %liar, task = %claim.task.id, "worker's outcome disagrees with the coordinator's own evaluation: quarantined");
+            self.queue.quarantine(liar);
+        }
+        Verdict {
+            outcome: truth,
+            agreed: false,
+            checker,
+            liars,
+        }
+    }
+}
+
+/// Outcomes compared to the bit: their JSON, which writes every float in its shortest exact form
+/// (so -0.0 and 0.0 differ, as their bits do).
+fn outcome_text(outcome: &Outcome) -> String {
+    serde_json::to_string(outcome).expect("outcomes serialize")
+}
+
+impl Evaluator for ClusterEvaluator {
+    fn evaluate(
+        &mut self,
+        tasks: &[Task],
+        on_done: &(dyn Fn(&Task, &Completion) + Sync),
+    ) -> Result<Vec<Completion>, EvaluatorError> {
+        let done = self.queue.submit(tasks.to_vec());
+        self.collect(tasks, &done, on_done)
+    }
+
+    fn check(&mut self, claims: &[Claim]) -> Result<Vec<Verdict>, EvaluatorError> {
+        let tasks: Vec<Task> = claims
+            .iter()
+            .map(|c| {
+                let id = TaskId(self.next_check);
+                self.next_check += 1;
+                Task {
+                    id,
+                    genome: c.task.genome.clone(),
+                    dims: c.task.dims,
+                }
+            })
+            .collect();
+        let done = self.queue.submit_excluding(
+            tasks
+                .iter()
+                .zip(claims)
+                .map(|(t, c)| (t.clone(), Some(c.claimant)))
+                .collect(),
+        );
+        let checks = self.collect(&tasks, &done, &|_, _| {})?;
+        self.stats.checks += claims.len() as u64;
+        let verdicts: Vec<Verdict> = claims
+            .iter()
+            .zip(&checks)
+            .map(|(claim, check)| {
+                if check.origin != Origin::GaveUp
+                    && outcome_text(&claim.outcome) == outcome_text(&check.outcome)
+                {
+                    Verdict {
+                        outcome: claim.outcome.clone(),
+                        agreed: true,
+                        checker: check.worker.clone(),
+                        liars: Vec::new(),
+                    }
+                } else {
+                    self.settle(claim, check)
+                }
+            })
+            .collect();
+        info!(
+            checks = claims.len(),
+            disagreed = verdicts.iter().filter(|v| !v.agreed).count(),
+            "claims checked"
+        );
+        Ok(verdicts)
+    }
+
+    fn is_quarantined(&self, worker: WorkerId) -> bool {
+        self.queue.is_quarantined(worker)
     }
 
     fn status(&self) -> Option<String> {
         let s = self.queue.stats();
         Some(format!(
-            "{} workers, {} leased, {} queued",
-            s.workers, s.leased, s.queued
+            "{} workers, {} leased, {} queued, {} checks",
+            s.workers, s.leased, s.queued, self.stats.checks
         ))
     }
 

@@ -12,5 +12,5 @@ pub mod status;
 
 pub use evaluator::ClusterEvaluator;
 pub use queue::{QueueRules, QueueStats, TaskQueue};
-pub use server::{ServerHandle, ServerOptions, start};
+pub use server::{ServerHandle, ServerOptions, Trust, start};
 pub use settings::{ClusterSection, ClusterSettings};

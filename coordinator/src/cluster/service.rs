@@ -28,12 +28,18 @@ pub struct CoordinatorService {
     scene: amorph::task::Scene,
     scene_id: String,
     scene_json: Vec<u8>,
+    trust: super::server::Trust,
 }
 
 impl CoordinatorService {
-    pub fn new(queue: Arc<TaskQueue>, scene: &amorph::task::Scene) -> Self {
+    pub fn new(
+        queue: Arc<TaskQueue>,
+        scene: &amorph::task::Scene,
+        trust: super::server::Trust,
+    ) -> Self {
         Self {
             queue,
+            trust,
             scene: scene.clone(),
             scene_id: convert::scene_id(scene),
             scene_json: convert::scene_to_wire(scene),
@@ -86,6 +92,7 @@ impl EvaluationCoordinator for CoordinatorService {
         request: Request<v1::RegisterRequest>,
     ) -> Result<Response<v1::RegisterResponse>, Status> {
         let peer = request.remote_addr();
+        let trusted = self.trust.trusts(request.metadata());
         let r = request.into_inner();
         status::protocol_version(r.protocol_version).inspect_err(|_| {
             warn!(
@@ -100,7 +107,9 @@ impl EvaluationCoordinator for CoordinatorService {
             Some(addr) => format!("{name} @{addr}"),
             None => name,
         };
-        let worker_id = self.queue.register(&name, r.capacity, Instant::now());
+        let worker_id = self
+            .queue
+            .register(&name, r.capacity, trusted, Instant::now());
         Ok(Response::new(v1::RegisterResponse {
             worker_id: worker_id.to_string(),
             heartbeat_interval_ms: self.queue.rules().heartbeat_interval.as_millis() as u32,

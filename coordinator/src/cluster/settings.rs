@@ -46,6 +46,9 @@ pub struct ClusterSection {
     pub max_attempts: u32,
     /// Longest a lease lives from its grant, heartbeats or not, ms.
     pub max_lease_ms: u64,
+    /// Check an outside worker's outcome by a second evaluation elsewhere before it may change a
+    /// population (the coordinator's own local workers are trusted). False trusts every worker.
+    pub verify: bool,
 }
 
 impl Default for ClusterSection {
@@ -63,6 +66,7 @@ impl Default for ClusterSection {
             worker_timeout_ms: 5000,
             max_attempts: 3,
             max_lease_ms: 3_600_000,
+            verify: true,
         }
     }
 }
@@ -101,6 +105,7 @@ pub struct ClusterSettings {
     pub tls: Option<(PathBuf, PathBuf)>,
     pub tls_domain: String,
     pub rules: QueueRules,
+    pub verify: bool,
 }
 
 /// `cluster.<key>` in milliseconds, between `min` and a day.
@@ -186,6 +191,7 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
                 max_attempts: c.max_attempts,
                 max_lease,
             },
+            verify: c.verify,
         })
     }
 }

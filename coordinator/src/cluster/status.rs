@@ -22,6 +22,7 @@ impl From<QueueError> for Status {
                 Status::not_found(e.to_string())
             }
             QueueError::NotLeasedTo { .. } => Status::failed_precondition(e.to_string()),
+            QueueError::Quarantined(_) => Status::permission_denied(e.to_string()),
         }
     }
 }

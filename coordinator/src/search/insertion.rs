@@ -36,10 +36,7 @@ impl BoundarySite {
     pub fn new(genome: &Genome, scene: &Scene, dims: GridDims) -> Self {
         let design = scene.design(genome, dims);
         let fields = density_fields(genome, dims, scene.palette().len());
-        let cells = design.cells();
-        let boundary = (0..dims.cell_count())
-            .filter(|&i| dims.neighbourhood(i).any(|j| cells[j] != cells[i]))
-            .collect();
+        let boundary = design.boundary_cells();
         Self {
             design,
             fields,
@@ -65,12 +62,7 @@ impl BoundarySite {
         let dims = self.design.dims();
         let cell = self.boundary[rng.random_range(0..self.boundary.len())];
         let materials = scene.palette().len();
-        let current = self.design.cells()[cell];
-        let states: Vec<Option<MaterialId>> = std::iter::once(None)
-            .chain((0..materials).map(|m| Some(MaterialId(m as u8))))
-            .filter(|&s| s != current)
-            .collect();
-        let target = states[rng.random_range(0..states.len())];
+        let target = other_state(self.design.cells()[cell], materials, rng);
         let rho: Vec<f64> = (0..materials)
             .map(|k| self.fields[k * dims.cell_count() + cell])
             .collect();
@@ -106,6 +98,19 @@ impl BoundarySite {
         });
         Some((cell, target))
     }
+}
+
+/// A state other than `current` for one voxel, uniformly among empty and the `materials`.
+pub fn other_state<R: Rng + ?Sized>(
+    current: Option<MaterialId>,
+    materials: usize,
+    rng: &mut R,
+) -> Option<MaterialId> {
+    let states: Vec<Option<MaterialId>> = std::iter::once(None)
+        .chain((0..materials).map(|m| Some(MaterialId(m as u8))))
+        .filter(|&s| s != current)
+        .collect();
+    states[rng.random_range(0..states.len())]
 }
 
 #[cfg(test)]

@@ -5,8 +5,7 @@
 //! fitness. The result depends only on the island's RNG stream, never on who evaluated what when.
 
 use amorph::genome::{
-    CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate,
-    random_genome,
+    CutPlane, DominantParent, Genome, MutationParams, crossover, mutate, random_genome,
 };
 use std::sync::Arc;
 
@@ -42,11 +41,10 @@ pub struct Child {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Breeding {
     pub mutation: MutationParams,
-    pub limits: GenomeLimits,
-    pub material_count: usize,
     /// Policies beyond the paper's operators (all off by default).
     pub variation: Variation,
-    /// The task, for variation that looks at the design a genome makes (boundary insertion).
+    /// The task: its genome limits and palette bound every operator, and boundary insertion
+    /// looks at the design a genome makes.
     pub scene: Arc<Scene>,
 }
 
@@ -73,7 +71,14 @@ impl Island {
         breeding: &Breeding,
     ) -> Vec<Genome> {
         (0..size)
-            .map(|_| random_genome(rng, points, &breeding.limits, breeding.material_count))
+            .map(|_| {
+                random_genome(
+                    rng,
+                    points,
+                    breeding.scene.limits(),
+                    breeding.scene.palette().len(),
+                )
+            })
             .collect()
     }
 
@@ -150,15 +155,15 @@ impl Island {
             &self.population[a].genome,
             &self.population[b].genome,
             &plane,
-            breeding.limits.max_points,
+            breeding.scene.limits().max_points,
         );
         let mut genome = cross.child;
         mutate(
             &mut genome,
             &mut self.rng,
             mutation,
-            &breeding.limits,
-            breeding.material_count,
+            breeding.scene.limits(),
+            breeding.scene.palette().len(),
         );
         let dominant_parent = match cross.dominant {
             DominantParent::A => a,
@@ -172,20 +177,39 @@ impl Island {
         }
     }
 
-    /// Applies an epoch's evaluated children in order: each replaces its dominant parent only if
-    /// strictly fitter than that slot's current occupant. Returns how many replaced.
+    /// Which of an epoch's evaluated children would replace their dominant parent, in order: each
+    /// only if strictly fitter than that slot's occupant at its turn (an earlier child of the
+    /// epoch may have taken it).
+    pub fn winners<'a>(&'a self, children: &[Child], outcomes: &[&'a Outcome]) -> Vec<bool> {
+        let mut slots: Vec<&Outcome> = self.population.iter().map(|i| &i.outcome).collect();
+        children
+            .iter()
+            .zip(outcomes)
+            .map(|(child, &outcome)| {
+                let slot = &mut slots[child.dominant_parent];
+                let wins = outcome.is_fitter_than(slot);
+                if wins {
+                    *slot = outcome;
+                }
+                wins
+            })
+            .collect()
+    }
+
+    /// Applies an epoch's evaluated children in order ([`Island::winners`]). Returns how many
+    /// replaced their dominant parent.
     pub fn apply(&mut self, children: Vec<Child>, outcomes: Vec<(TaskId, Outcome)>) -> usize {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
+        let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
+        let wins = self.winners(&children, &refs);
         let mut replaced = 0;
-        for (child, (task, outcome)) in children.into_iter().zip(outcomes) {
-            let slot = &mut self.population[child.dominant_parent];
-            let wins = outcome.is_fitter_than(&slot.outcome);
+        for ((child, (task, outcome)), wins) in children.into_iter().zip(outcomes).zip(wins) {
             if !child.nudge {
                 self.last_success.1 += 1;
                 self.last_success.0 += usize::from(wins);
             }
             if wins {
-                *slot = Individual {
+                self.population[child.dominant_parent] = Individual {
                     genome: child.genome,
                     outcome,
                     task,
@@ -232,6 +256,7 @@ mod tests {
     use super::*;
     use crate::search::fixtures::{failed, island, point_at, scored};
     use crate::search::variation::LocalSearchParams;
+    use amorph::genome::GenomeLimits;
 
     fn child(dominant_parent: usize, x: f64) -> Child {
         Child {
@@ -292,8 +317,6 @@ mod tests {
     fn breeding(variation: Variation) -> Breeding {
         Breeding {
             mutation: MutationParams::default(),
-            limits: GenomeLimits::default(),
-            material_count: 2,
             variation,
             scene: Arc::new(
                 toml::from_str("kind = \"beam\"\ntarget = \"circular_arc\"").expect("a beam"),
@@ -330,7 +353,9 @@ mod tests {
                     "probability 1 moves every coordinate"
                 );
             }
-            c.genome.validate(&b.limits, 2).expect("within limits");
+            c.genome
+                .validate(b.scene.limits(), 2)
+                .expect("within limits");
         }
     }
 
@@ -368,7 +393,9 @@ mod tests {
                             || p.position.iter().any(|&v| v == 0.0 || v == 1.0)
                     );
                 }
-                c.genome.validate(&b.limits, 2).expect("within limits");
+                c.genome
+                    .validate(b.scene.limits(), 2)
+                    .expect("within limits");
             }
         }
     }

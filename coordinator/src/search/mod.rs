@@ -13,7 +13,7 @@ mod variation;
 pub use diversity::{
     DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
 };
-pub use insertion::BoundarySite;
+pub use insertion::{BoundarySite, other_state};
 pub use island::{Breeding, Child, Individual, Island};
 pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,

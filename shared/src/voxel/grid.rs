@@ -118,6 +118,18 @@ impl VoxelGrid {
         &self.cells
     }
 
+    /// Flat indices of the cells whose state (empty or a material) differs from one of their 26
+    /// neighbours', in index order: where a one-voxel change of the design can happen.
+    pub fn boundary_cells(&self) -> Vec<usize> {
+        (0..self.dims.cell_count())
+            .filter(|&i| {
+                self.dims
+                    .neighbourhood(i)
+                    .any(|j| self.cells[j] != self.cells[i])
+            })
+            .collect()
+    }
+
     #[inline]
     pub fn get(&self, x: usize, y: usize, z: usize) -> Option<MaterialId> {
         self.cells[self.dims.index(x, y, z)]

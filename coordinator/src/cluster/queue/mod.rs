@@ -17,6 +17,11 @@
 //! - A worker's error (or a malformed outcome) is noted; the task is not leased to that worker
 //!   again, and is marked failed only once `max_attempts` *different* workers have given errors,
 //!   so one worker cannot fail a task however often it reports.
+//! - A check task (`TaskId::is_check`, verification of an outside worker's outcome) is never
+//!   leased to the worker whose outcome it checks; one no live worker may take is handed to the
+//!   coordinator itself (`orphan_checks`), so a check never waits for a worker that cannot come.
+//! - A quarantined worker (caught disagreeing with a check) loses its leases and every later call
+//!   is refused; trusted workers (the coordinator's own) are never checked.
 
 mod rules;
 mod task;
@@ -34,6 +39,7 @@ use std::time::Instant;
 use amorph::task::Outcome;
 use tracing::{info, warn};
 
+use crate::evaluator::Origin;
 use crate::evaluator::{Completion, Task};
 use crate::ids::{TaskId, WorkerId};
 pub use rules::{Disposition, NotedError, QueueError, QueueRules, QueueStats};
@@ -45,6 +51,8 @@ struct WorkerState {
     capacity: u32,
     last_seen: Instant,
     leased: HashSet<TaskId>,
+    /// In this process (or trusted by config): its outcomes are final without a check.
+    trusted: bool,
 }
 
 /// A registered worker that has just been heard from: `now` is its last sign of life.
@@ -71,8 +79,12 @@ struct State {
     /// Tasks of earlier batches and the workers they were leased to, so a late report is told
     /// apart as a duplicate (it was leased to the reporter) or a forgery (it was not).
     earlier: HashMap<TaskId, Box<[WorkerId]>>,
-    /// Highest task id ever submitted.
-    highest_task: Option<TaskId>,
+    /// Highest task id ever submitted, of search tasks and of check tasks.
+    highest_task: [Option<TaskId>; 2],
+    /// Workers caught disagreeing with a check: every later call of theirs is refused.
+    quarantined: HashSet<WorkerId>,
+    /// When the current batch was submitted.
+    submitted: Instant,
     completions: Option<Sender<Completion>>,
     noted_errors: Vec<NotedError>,
     run_finished: bool,
@@ -104,7 +116,9 @@ impl TaskQueue {
                 tasks: BTreeMap::new(),
                 queued: BTreeSet::new(),
                 earlier: HashMap::new(),
-                highest_task: None,
+                highest_task: [None, None],
+                quarantined: HashSet::new(),
+                submitted: Instant::now(),
                 completions: None,
                 noted_errors: Vec::new(),
                 run_finished: false,
@@ -135,8 +149,9 @@ impl TaskQueue {
         worker.tag == self.tag && worker.serial >= 1 && worker.serial <= s.next_worker
     }
 
-    /// Registers a worker; `name` must already be cleaned of control characters.
-    pub fn register(&self, name: &str, capacity: u32, now: Instant) -> WorkerId {
+    /// Registers a worker; `name` must already be cleaned of control characters. A `trusted`
+    /// worker's outcomes are final without a check.
+    pub fn register(&self, name: &str, capacity: u32, trusted: bool, now: Instant) -> WorkerId {
         let mut s = self.lock();
         s.next_worker += 1;
         let id = WorkerId {
@@ -150,9 +165,10 @@ impl TaskQueue {
                 capacity,
                 last_seen: now,
                 leased: HashSet::new(),
+                trusted,
             },
         );
-        info!(worker = %id, name, capacity, "worker registered");
+        info!(worker = %id, name, capacity, trusted, "worker registered");
         id
     }
 
@@ -167,6 +183,7 @@ impl TaskQueue {
     ) -> Result<(Vec<Arc<Task>>, bool), QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
+        s.refuse_quarantined(worker)?;
         let w = seen(&mut s.workers, worker, now)?;
         if s.run_finished {
             return Ok((Vec::new(), true));
@@ -175,7 +192,7 @@ impl TaskQueue {
         let chosen: Vec<TaskId> = s
             .queued
             .iter()
-            .filter(|&&id| !s.tasks[&id].failed_by(worker))
+            .filter(|&&id| s.tasks[&id].may_take(worker))
             .take(room)
             .copied()
             .collect();
@@ -207,6 +224,7 @@ impl TaskQueue {
             return Err(QueueError::UnknownWorker(worker));
         }
         let s = &mut *guard;
+        s.refuse_quarantined(worker)?;
         let Some(t) = s.tasks.get_mut(&task) else {
             return match s.earlier.get(&task) {
                 Some(leased_to) if leased_to.contains(&worker) => {
@@ -226,11 +244,16 @@ impl TaskQueue {
         }
         let disposition = match result {
             Ok(outcome) => {
-                let by = match s.workers.get(&worker) {
-                    Some(w) => format!("{} ({worker})", w.name),
-                    None => worker.to_string(),
+                let (by, trusted) = match s.workers.get(&worker) {
+                    Some(w) => (format!("{} ({worker})", w.name), w.trusted),
+                    None => (worker.to_string(), false),
                 };
-                s.finish(task, outcome, by, wall_seconds);
+                let origin = if trusted {
+                    Origin::Trusted
+                } else {
+                    Origin::Claim(worker)
+                };
+                s.finish(task, outcome, by, origin, wall_seconds);
                 Disposition::Accepted
             }
             Err(error) => {
@@ -268,6 +291,7 @@ impl TaskQueue {
     ) -> Result<(Vec<TaskId>, bool), QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
+        s.refuse_quarantined(worker)?;
         seen(&mut s.workers, worker, now)?;
         let mut revoked = Vec::new();
         for &id in active {
@@ -287,6 +311,7 @@ impl TaskQueue {
     pub fn release(&self, worker: WorkerId, ids: &[TaskId]) -> Result<u32, QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
+        s.refuse_quarantined(worker)?;
         let w = s
             .workers
             .get(&worker)
@@ -353,6 +378,12 @@ impl TaskQueue {
     /// Replaces the current batch with `tasks` (ids must increase) and returns the channel its
     /// completions arrive on, one per task, in the order they finish.
     pub fn submit(&self, tasks: Vec<Task>) -> Receiver<Completion> {
+        self.submit_excluding(tasks.into_iter().map(|t| (t, None)).collect())
+    }
+
+    /// [`TaskQueue::submit`] for tasks each of which may be kept from one worker: a check task is
+    /// never leased to the worker whose outcome it checks.
+    pub fn submit_excluding(&self, tasks: Vec<(Task, Option<WorkerId>)>) -> Receiver<Completion> {
         let (tx, rx) = channel();
         let mut guard = self.lock();
         let s = &mut *guard;
@@ -363,20 +394,86 @@ impl TaskQueue {
             s.earlier.insert(id, t.leased_to.into_boxed_slice());
         }
         s.queued.clear();
-        for (slot, task) in tasks.into_iter().enumerate() {
+        for (slot, (task, excluded)) in tasks.into_iter().enumerate() {
             let id = task.id;
+            let highest = &mut s.highest_task[usize::from(id.is_check())];
             assert!(
-                s.highest_task.is_none_or(|h| id > h),
+                highest.is_none_or(|h| id > h),
                 "task ids increase across batches"
             );
-            s.highest_task = Some(id);
+            *highest = Some(id);
             s.queued.insert(id);
-            s.tasks.insert(id, TaskState::new(task, slot));
+            s.tasks.insert(id, TaskState::new(task, slot, excluded));
         }
         s.completions = Some(tx);
+        s.submitted = Instant::now();
         drop(guard);
         self.work.notify_waiters();
         rx
+    }
+
+    /// Queued check tasks that no live worker may take (each is kept from its claimant, and the
+    /// others failed it, or there are none), or that no one has taken for a lease's length since
+    /// the batch was submitted (a worker may be alive and never ask): the coordinator evaluates
+    /// them itself and hands the outcome to [`TaskQueue::finish_here`].
+    pub fn orphan_checks(&self, now: Instant) -> Vec<Arc<Task>> {
+        let s = self.lock();
+        let waited = now.saturating_duration_since(s.submitted) >= self.rules.lease;
+        s.queued
+            .iter()
+            .map(|id| &s.tasks[id])
+            .filter(|t| t.task.id.is_check())
+            .filter(|t| {
+                waited
+                    || !s
+                        .workers
+                        .iter()
+                        .any(|(&w, ws)| ws.capacity > 0 && t.may_take(w))
+            })
+            .map(|t| t.task.clone())
+            .collect()
+    }
+
+    /// An outcome the coordinator computed itself for a task of the batch (see
+    /// [`TaskQueue::orphan_checks`]); a task already final keeps its outcome.
+    pub fn finish_here(&self, task: TaskId, outcome: Outcome, wall_seconds: f64) {
+        let mut s = self.lock();
+        if s.tasks.get(&task).is_some_and(|t| !t.phase.is_final()) {
+            s.finish(
+                task,
+                outcome,
+                "coordinator".into(),
+                Origin::Trusted,
+                wall_seconds,
+            );
+        }
+    }
+
+    /// Refuses every later call of `worker` and returns its leases to the queue: it was caught
+    /// reporting an outcome a check contradicted.
+    pub fn quarantine(&self, worker: WorkerId) {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        if !s.quarantined.insert(worker) {
+            return;
+        }
+        let held: Vec<TaskId> = s
+            .workers
+            .get(&worker)
+            .map(|w| w.leased.iter().copied().collect())
+            .unwrap_or_default();
+        for id in held {
+            s.requeue_or_fail(id, self.rules.max_attempts);
+        }
+        s.workers.remove(&worker);
+        warn!(%worker, "worker quarantined: its leases go back to the queue and its calls are refused");
+        drop(guard);
+        self.work.notify_waiters();
+    }
+
+    /// Whether `worker` is in this process's quarantine.
+    pub fn is_quarantined(&self, worker: WorkerId) -> bool {
+        self.lock().quarantined.contains(&worker)
     }
 
     /// Ends the run: leases answer `run_finished`, waiting leases return at once.

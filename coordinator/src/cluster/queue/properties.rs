@@ -1,5 +1,5 @@
 //! Property tests: random interleavings of register / lease / heartbeat / report / release /
-//! expiry / silence from several workers, honest or not, with the queue's invariants checked
+//! expiry / silence / quarantine from several workers, honest or not, with the queue's invariants checked
 //! after every step, and at the end every task finished exactly once with the first accepted
 //! outcome.
 
@@ -45,6 +45,10 @@ enum Op {
         serial: u64,
         task: u64,
     },
+    /// A worker is caught disagreeing with a check.
+    Quarantine {
+        worker: usize,
+    },
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -57,6 +61,7 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (0usize..8, any::<u8>()).prop_map(|(worker, tasks)| Op::Release { worker, tasks }),
         2 => (0u64..12_000).prop_map(|ms| Op::Advance { ms }),
         1 => (0u64..12, 0u64..TASKS + 2).prop_map(|(serial, task)| Op::Forged { serial, task }),
+        1 => (0usize..8).prop_map(|worker| Op::Quarantine { worker }),
     ]
 }
 
@@ -143,7 +148,7 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
     let pick = |workers: &[WorkerId], i: usize| workers.get(i % workers.len().max(1)).copied();
     for op in ops {
         match op {
-            Op::Register { capacity } => workers.push(q.register("w", capacity, now)),
+            Op::Register { capacity } => workers.push(q.register("w", capacity, false, now)),
             Op::Lease { worker, max } => {
                 if let Some(w) = pick(&workers, worker)
                     && let Ok((leased, _)) = q.lease(w, max, now)
@@ -202,6 +207,17 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                 );
                 prop_assert!(q.lease(forged, 4, now).is_err());
             }
+            Op::Quarantine { worker } => {
+                if let Some(w) = pick(&workers, worker) {
+                    q.quarantine(w);
+                    prop_assert_eq!(q.lease(w, 4, now).err(), Some(QueueError::Quarantined(w)));
+                    prop_assert_eq!(
+                        q.report(w, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0)
+                            .err(),
+                        Some(QueueError::Quarantined(w))
+                    );
+                }
+            }
         }
         q.lock().check(max_attempts).map_err(TestCaseError::fail)?;
         seen.drain(&rx)?;
@@ -210,7 +226,9 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
     // Honest workers arrive after everyone else has gone: nothing may be stranded.
     now += Duration::from_secs(3600);
     q.reap(now);
-    let honest: Vec<WorkerId> = (0..2).map(|_| q.register("honest", 4, now)).collect();
+    let honest: Vec<WorkerId> = (0..2)
+        .map(|_| q.register("honest", 4, false, now))
+        .collect();
     for _ in 0..TASKS {
         for &w in &honest {
             let (leased, _) = q.lease(w, 4, now).expect("registered");

@@ -50,6 +50,8 @@ pub enum QueueError {
     UnknownTask(TaskId),
     #[error("{task} was never leased to worker {worker}")]
     NotLeasedTo { task: TaskId, worker: WorkerId },
+    #[error("worker {0} is quarantined: an outcome it reported disagreed with a check")]
+    Quarantined(WorkerId),
 }
 
 /// Counts for progress lines and benchmarks.

@@ -11,7 +11,7 @@ use amorph::task::Outcome;
 use tracing::warn;
 
 use super::State;
-use crate::evaluator::{Completion, Task};
+use crate::evaluator::{Completion, Origin, Task};
 use crate::ids::{TaskId, WorkerId};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,24 +45,32 @@ pub(super) struct TaskState {
     pub(super) leased_to: Vec<WorkerId>,
     /// Errors, at most one per worker.
     pub(super) errors: Vec<(WorkerId, String)>,
+    /// The worker this task is kept from: a check is never evaluated by its claimant.
+    pub(super) excluded: Option<WorkerId>,
     /// Whether "no live worker can take it" was logged since the last change of workers.
     unservable_logged: bool,
 }
 
 impl TaskState {
-    pub(super) fn new(task: Task, slot: usize) -> Self {
+    pub(super) fn new(task: Task, slot: usize, excluded: Option<WorkerId>) -> Self {
         Self {
             task: Arc::new(task),
             slot,
             phase: Phase::Queued,
             leased_to: Vec::new(),
             errors: Vec::new(),
+            excluded,
             unservable_logged: false,
         }
     }
 
     pub(super) fn failed_by(&self, worker: WorkerId) -> bool {
         self.errors.iter().any(|(w, _)| *w == worker)
+    }
+
+    /// Whether `worker` may be leased this task: it has not failed it and is not its claimant.
+    pub(super) fn may_take(&self, worker: WorkerId) -> bool {
+        !self.failed_by(worker) && self.excluded != Some(worker)
     }
 }
 
@@ -139,17 +147,39 @@ impl State {
         )));
         self.leave_phase(id);
         self.tasks.get_mut(&id).expect("checked above").phase = Phase::Failed;
-        self.complete(id, outcome, "coordinator".into(), 0.0);
+        self.complete(id, outcome, "coordinator".into(), Origin::GaveUp, 0.0);
     }
 
     /// Queued or leased → done with the first accepted outcome.
-    pub(super) fn finish(&mut self, id: TaskId, outcome: Outcome, by: String, wall_seconds: f64) {
+    pub(super) fn finish(
+        &mut self,
+        id: TaskId,
+        outcome: Outcome,
+        by: String,
+        origin: Origin,
+        wall_seconds: f64,
+    ) {
         self.leave_phase(id);
         self.tasks.get_mut(&id).expect("reported tasks exist").phase = Phase::Done;
-        self.complete(id, outcome, by, wall_seconds);
+        self.complete(id, outcome, by, origin, wall_seconds);
     }
 
-    fn complete(&mut self, id: TaskId, outcome: Outcome, worker: String, wall_seconds: f64) {
+    /// `Err(Quarantined)` for a worker caught disagreeing with a check.
+    pub(super) fn refuse_quarantined(&self, worker: WorkerId) -> Result<(), super::QueueError> {
+        if self.quarantined.contains(&worker) {
+            return Err(super::QueueError::Quarantined(worker));
+        }
+        Ok(())
+    }
+
+    fn complete(
+        &mut self,
+        id: TaskId,
+        outcome: Outcome,
+        worker: String,
+        origin: Origin,
+        wall_seconds: f64,
+    ) {
         self.stats.completed += 1;
         if let Some(tx) = &self.completions {
             // The search may have given up on the batch (shutdown); nothing to deliver to then.
@@ -158,6 +188,7 @@ impl State {
                 outcome,
                 worker,
                 wall_seconds,
+                origin,
             });
         }
     }
@@ -171,7 +202,11 @@ impl State {
         }
         for &id in &self.queued {
             let t = self.tasks.get_mut(&id).expect("queued tasks exist");
-            if !t.unservable_logged && self.workers.keys().all(|&w| t.failed_by(w)) {
+            // A check no one may take goes to the coordinator itself (`orphan_checks`).
+            if !t.unservable_logged
+                && !id.is_check()
+                && self.workers.keys().all(|&w| !t.may_take(w))
+            {
                 t.unservable_logged = true;
                 warn!(task = %id, failed_by = t.errors.len(), "every connected worker failed this task: it waits for another worker");
             }
@@ -212,6 +247,9 @@ impl State {
             }
         }
         for (&wid, w) in &self.workers {
+            if self.quarantined.contains(&wid) {
+                return Err(format!("{wid} is quarantined yet still registered"));
+            }
             if w.leased.len() > w.capacity as usize {
                 return Err(format!("{wid} holds {} > capacity", w.leased.len()));
             }

@@ -1,0 +1,200 @@
+//! Which outcomes of a batch must be checked before the search may use them, and the loop that
+//! checks them.
+//!
+//! An outside worker's outcome is a claim (`Origin::Claim`). Checking every claim would double the
+//! cost of a run; checking none would let one worker with the token steer it. The search is
+//! steered only by outcomes that change a population (an initial or re-evaluated individual, a
+//! child that replaces its dominant parent, and through those every best and every migrant), so
+//! those are checked, each by a second evaluation elsewhere (`Evaluator::check`), before the batch
+//! is applied. A correction can change which children win, so the selection repeats until every
+//! deciding outcome is settled. A worker caught disagreeing has every other outcome of the batch
+//! checked too. Honest workers' claims are confirmed to the bit, so the run is bit-identical with
+//! and without verification.
+
+use amorph::genome::Genome;
+use amorph::task::Outcome;
+use amorph::voxel::GridDims;
+use tracing::warn;
+
+use crate::evaluator::{Claim, Evaluator, EvaluatorError, Task, Verdict};
+use crate::ids::{TaskId, WorkerId};
+use crate::store::StoreError;
+
+/// One evaluated task of a batch, as the search receives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Evaluated {
+    pub task: TaskId,
+    pub outcome: Outcome,
+    /// The outside worker whose unchecked word `outcome` is; `None` once checked, or when this
+    /// process evaluated it.
+    pub claimant: Option<WorkerId>,
+}
+
+/// For a batch as it stands, which outcomes would change a population, grouped like the batch.
+pub type Decisive<'a> = &'a dyn Fn(&[Vec<Evaluated>]) -> Vec<Vec<bool>>;
+
+/// The claimant of an unchecked outcome an earlier session of the run stored: no live worker, so
+/// any worker may make its check.
+pub const EARLIER_SESSION: WorkerId = WorkerId { serial: 0, tag: 0 };
+
+#[derive(Debug, thiserror::Error)]
+pub enum VerificationError {
+    #[error(transparent)]
+    Evaluator(#[from] EvaluatorError),
+    #[error(transparent)]
+    Store(#[from] StoreError),
+}
+
+/// Checks the claims of `batch` (grouped like `genomes`, evaluated at `dims`) that `decisive`
+/// marks, repeating until none is left unchecked; hands every verdict to `record` (the run store)
+/// before the batch takes its outcome. Returns how many checks were made.
+pub fn confirm(
+    batch: &mut [Vec<Evaluated>],
+    genomes: &[Vec<Genome>],
+    dims: GridDims,
+    evaluator: &mut dyn Evaluator,
+    decisive: Decisive<'_>,
+    record: &mut dyn FnMut(&Claim, &Verdict) -> Result<(), StoreError>,
+) -> Result<u64, VerificationError> {
+    let mut checks = 0;
+    loop {
+        let deciding = decisive(batch);
+        let mut at = Vec::new();
+        let mut claims = Vec::new();
+        for (g, group) in batch.iter().enumerate() {
+            for (i, e) in group.iter().enumerate() {
+                let Some(claimant) = e.claimant else { continue };
+                if deciding[g][i] || evaluator.is_quarantined(claimant) {
+                    at.push((g, i));
+                    claims.push(Claim {
+                        task: Task {
+                            id: e.task,
+                            genome: genomes[g][i].clone(),
+                            dims,
+                        },
+                        outcome: e.outcome.clone(),
+                        claimant,
+                    });
+                }
+            }
+        }
+        if claims.is_empty() {
+            return Ok(checks);
+        }
+        let verdicts = evaluator.check(&claims)?;
+        checks += claims.len() as u64;
+        for ((g, i), (claim, verdict)) in at.into_iter().zip(claims.iter().zip(verdicts)) {
+            for liar in &verdict.liars {
+                warn!(worker = %liar, task = %claim.task.id, "worker caught disagreeing with a check");
+            }
+            record(claim, &verdict)?;
+            let e = &mut batch[g][i];
+            e.outcome = verdict.outcome;
+            e.claimant = None;
+        }
+    }
+}
+
+/// Every outcome of the batch decides (initial and re-evaluated populations).
+pub fn all_decide(batch: &[Vec<Evaluated>]) -> Vec<Vec<bool>> {
+    batch.iter().map(|g| vec![true; g.len()]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::evaluator::Completion;
+    use amorph::outcome::Failure;
+
+    /// An evaluator whose checks answer from a fixed truth: fitness = task id.
+    struct Truth {
+        quarantined: Vec<WorkerId>,
+        asked: Vec<TaskId>,
+    }
+
+    fn scored(fitness: f64) -> Outcome {
+        Outcome::failed(Failure::Internal(format!("{fitness}")))
+    }
+
+    impl Evaluator for Truth {
+        fn evaluate(
+            &mut self,
+            _: &[Task],
+            _: &(dyn Fn(&Task, &Completion) + Sync),
+        ) -> Result<Vec<Completion>, EvaluatorError> {
+            unreachable!()
+        }
+
+        fn check(&mut self, claims: &[Claim]) -> Result<Vec<Verdict>, EvaluatorError> {
+            Ok(claims
+                .iter()
+                .map(|c| {
+                    self.asked.push(c.task.id);
+                    let truth = scored(c.task.id.0 as f64);
+                    let agreed = truth == c.outcome;
+                    if !agreed {
+                        self.quarantined.push(c.claimant);
+                    }
+                    Verdict {
+                        outcome: truth,
+                        agreed,
+                        checker: "truth".into(),
+                        liars: if agreed { vec![] } else { vec![c.claimant] },
+                    }
+                })
+                .collect())
+        }
+
+        fn is_quarantined(&self, worker: WorkerId) -> bool {
+            self.quarantined.contains(&worker)
+        }
+    }
+
+    #[test]
+    fn only_deciding_claims_are_checked_and_a_liars_other_claims_follow() {
+        let honest = WorkerId { serial: 1, tag: 7 };
+        let liar = WorkerId { serial: 2, tag: 7 };
+        let e = |task: u64, fitness: f64, claimant: Option<WorkerId>| Evaluated {
+            task: TaskId(task),
+            outcome: scored(fitness),
+            claimant,
+        };
+        // Task 1: trusted. 2: honest claim that decides. 3: honest claim that does not.
+        // 4: a lie that decides. 5: a lie that does not decide, found once 4 is caught.
+        let mut batch = vec![vec![
+            e(1, 1.0, None),
+            e(2, 2.0, Some(honest)),
+            e(3, 3.0, Some(honest)),
+            e(4, 40.0, Some(liar)),
+            e(5, 50.0, Some(liar)),
+        ]];
+        let genomes = vec![vec![Genome { points: vec![] }; 5]];
+        let mut truth = Truth {
+            quarantined: vec![],
+            asked: vec![],
+        };
+        let decide = |b: &[Vec<Evaluated>]| vec![b[0].iter().map(|e| e.task.0 % 2 == 0).collect()];
+        let mut caught = Vec::new();
+        let checks = confirm(
+            &mut batch,
+            &genomes,
+            GridDims::new(2, 2, 2),
+            &mut truth,
+            &decide,
+            &mut |claim, verdict| {
+                caught.extend(verdict.liars.iter().map(|&w| (w, claim.task.id)));
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert_eq!(checks, 3);
+        assert_eq!(truth.asked, [TaskId(2), TaskId(4), TaskId(5)]);
+        for (i, e) in batch[0].iter().enumerate() {
+            let task = i as u64 + 1;
+            let expected_claimant = (task == 3).then_some(honest);
+            assert_eq!(e.claimant, expected_claimant, "task {task}");
+            assert_eq!(e.outcome, scored(task as f64), "task {task}");
+        }
+        assert_eq!(caught, [(liar, TaskId(4)), (liar, TaskId(5))]);
+    }
+}
