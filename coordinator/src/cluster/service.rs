@@ -109,7 +109,7 @@ impl EvaluationCoordinator for CoordinatorService {
         };
         let worker_id = self
             .queue
-            .register(&name, r.capacity, trusted, Instant::now());
+            .register(&name, r.capacity, trusted, Instant::now())?;
         Ok(Response::new(v1::RegisterResponse {
             worker_id: worker_id.to_string(),
             heartbeat_interval_ms: self.queue.rules().heartbeat_interval.as_millis() as u32,

@@ -42,7 +42,7 @@ use tracing::{info, warn};
 use crate::evaluator::Origin;
 use crate::evaluator::{Completion, Task};
 use crate::ids::{TaskId, WorkerId};
-pub use rules::{Disposition, NotedError, QueueError, QueueRules, QueueStats};
+pub use rules::{Disposition, MAX_WORKERS, NotedError, QueueError, QueueRules, QueueStats};
 use task::{Phase, TaskState};
 
 #[derive(Debug)]
@@ -150,9 +150,24 @@ impl TaskQueue {
     }
 
     /// Registers a worker; `name` must already be cleaned of control characters. A `trusted`
-    /// worker's outcomes are final without a check.
-    pub fn register(&self, name: &str, capacity: u32, trusted: bool, now: Instant) -> WorkerId {
+    /// worker's outcomes are final without a check. At most [`MAX_WORKERS`] outside workers are
+    /// registered at once (a silent one is dropped after `worker_timeout`), so registrations
+    /// cannot grow the coordinator's memory without bound.
+    pub fn register(
+        &self,
+        name: &str,
+        capacity: u32,
+        trusted: bool,
+        now: Instant,
+    ) -> Result<WorkerId, QueueError> {
         let mut s = self.lock();
+        if !trusted && s.workers.values().filter(|w| !w.trusted).count() >= MAX_WORKERS {
+            warn!(
+                name,
+                "registration refused: {MAX_WORKERS} outside workers already registered"
+            );
+            return Err(QueueError::TooManyWorkers);
+        }
         s.next_worker += 1;
         let id = WorkerId {
             serial: s.next_worker,
@@ -169,7 +184,7 @@ impl TaskQueue {
             },
         );
         info!(worker = %id, name, capacity, trusted, "worker registered");
-        id
+        Ok(id)
     }
 
     /// Up to `max` queued tasks for `worker`, capped by the capacity it registered with minus what

@@ -148,7 +148,9 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
     let pick = |workers: &[WorkerId], i: usize| workers.get(i % workers.len().max(1)).copied();
     for op in ops {
         match op {
-            Op::Register { capacity } => workers.push(q.register("w", capacity, false, now)),
+            Op::Register { capacity } => {
+                workers.push(q.register("w", capacity, false, now).unwrap())
+            }
             Op::Lease { worker, max } => {
                 if let Some(w) = pick(&workers, worker)
                     && let Ok((leased, _)) = q.lease(w, max, now)
@@ -227,7 +229,7 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
     now += Duration::from_secs(3600);
     q.reap(now);
     let honest: Vec<WorkerId> = (0..2)
-        .map(|_| q.register("honest", 4, false, now))
+        .map(|_| q.register("honest", 4, false, now).unwrap())
         .collect();
     for _ in 0..TASKS {
         for &w in &honest {

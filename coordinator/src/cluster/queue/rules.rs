@@ -34,6 +34,9 @@ impl Default for QueueRules {
     }
 }
 
+/// Most outside workers registered at once.
+pub const MAX_WORKERS: usize = 4096;
+
 /// What a report did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Disposition {
@@ -52,6 +55,8 @@ pub enum QueueError {
     NotLeasedTo { task: TaskId, worker: WorkerId },
     #[error("worker {0} is quarantined: an outcome it reported disagreed with a check")]
     Quarantined(WorkerId),
+    #[error("{MAX_WORKERS} outside workers are registered: try again once some have left")]
+    TooManyWorkers,
 }
 
 /// Counts for progress lines and benchmarks.

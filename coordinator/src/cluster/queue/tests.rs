@@ -40,7 +40,7 @@ const T2: TaskId = TaskId(2);
 fn leases_respect_capacity_and_task_order() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let w = q.register("a", 2, false, t0);
+    let w = q.register("a", 2, false, t0).unwrap();
     let rx = q.submit(tasks(1..=5));
     assert_eq!(ids(&q.lease(w, 8, t0).unwrap().0), [1, 2]);
     assert!(q.lease(w, 8, t0).unwrap().0.is_empty(), "at capacity");
@@ -54,8 +54,8 @@ fn leases_respect_capacity_and_task_order() {
 fn an_expired_lease_is_redispatched_and_the_late_report_counts_once() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 1, false, t0);
-    let b = q.register("b", 1, false, t0);
+    let a = q.register("a", 1, false, t0).unwrap();
+    let b = q.register("b", 1, false, t0).unwrap();
     let rx = q.submit(tasks(1..=1));
     assert_eq!(ids(&q.lease(a, 1, t0).unwrap().0), [1]);
     // a heartbeats (stays registered) but never names the task: the lease runs out.
@@ -78,8 +78,8 @@ fn an_expired_lease_is_redispatched_and_the_late_report_counts_once() {
 fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 1, false, t0);
-    let b = q.register("b", 1, false, t0);
+    let a = q.register("a", 1, false, t0).unwrap();
+    let b = q.register("b", 1, false, t0).unwrap();
     let rx = q.submit(tasks(1..=1));
     q.lease(a, 1, t0).unwrap();
     let later = t0 + Duration::from_secs(11);
@@ -105,8 +105,8 @@ fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
 fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 1, false, t0);
-    let b = q.register("b", 1, false, t0);
+    let a = q.register("a", 1, false, t0).unwrap();
+    let b = q.register("b", 1, false, t0).unwrap();
     let rx = q.submit(tasks(1..=1));
     q.lease(a, 1, t0).unwrap();
     assert_eq!(
@@ -140,8 +140,8 @@ fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
 fn regression_an_error_from_a_former_holder_leaves_the_current_lease_alone() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 1, false, t0);
-    let b = q.register("b", 1, false, t0);
+    let a = q.register("a", 1, false, t0).unwrap();
+    let b = q.register("b", 1, false, t0).unwrap();
     q.submit(tasks(1..=1));
     q.lease(a, 1, t0).unwrap();
     q.release(a, &[T1]).unwrap();
@@ -162,7 +162,7 @@ fn regression_an_error_from_a_former_holder_leaves_the_current_lease_alone() {
 fn heartbeats_keep_leases_and_silence_loses_them() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 1, false, t0);
+    let a = q.register("a", 1, false, t0).unwrap();
     q.submit(tasks(1..=1));
     q.lease(a, 1, t0).unwrap();
     let mut now = t0;
@@ -189,8 +189,8 @@ fn heartbeats_keep_leases_and_silence_loses_them() {
 fn reports_for_unknown_or_never_leased_tasks_are_refused() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 4, false, t0);
-    let b = q.register("b", 4, false, t0);
+    let a = q.register("a", 4, false, t0).unwrap();
+    let b = q.register("b", 4, false, t0).unwrap();
     q.submit(tasks(1..=2));
     q.lease(a, 1, t0).unwrap();
     assert_eq!(
@@ -241,7 +241,7 @@ fn a_task_failing_on_three_different_workers_is_marked_failed_with_the_reasons()
     let t0 = Instant::now();
     let workers: Vec<_> = ["a", "b", "c"]
         .iter()
-        .map(|n| q.register(n, 1, false, t0))
+        .map(|n| q.register(n, 1, false, t0).unwrap())
         .collect();
     let rx = q.submit(tasks(1..=1));
     for (i, &w) in workers.iter().enumerate() {
@@ -254,7 +254,7 @@ fn a_task_failing_on_three_different_workers_is_marked_failed_with_the_reasons()
             "a completion only at the third worker's error"
         );
     }
-    let d = q.register("d", 1, false, t0);
+    let d = q.register("d", 1, false, t0).unwrap();
     assert!(
         q.lease(d, 1, t0).unwrap().0.is_empty(),
         "a failed task is never leased again"
@@ -267,8 +267,8 @@ fn a_task_failing_on_three_different_workers_is_marked_failed_with_the_reasons()
 fn released_tasks_go_back_to_the_front() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 2, false, t0);
-    let b = q.register("b", 2, false, t0);
+    let a = q.register("a", 2, false, t0).unwrap();
+    let b = q.register("b", 2, false, t0).unwrap();
     q.submit(tasks(1..=4));
     q.lease(a, 2, t0).unwrap();
     assert_eq!(q.release(a, &[T1, T2]).unwrap(), 2);
@@ -282,8 +282,8 @@ fn released_tasks_go_back_to_the_front() {
 fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let a = q.register("a", 4, false, t0);
-    let b = q.register("b", 4, false, t0);
+    let a = q.register("a", 4, false, t0).unwrap();
+    let b = q.register("b", 4, false, t0).unwrap();
     q.submit(tasks(1..=2));
     q.lease(a, 4, t0).unwrap();
     q.report(a, T1, ok(), 0.0).unwrap();
@@ -309,8 +309,8 @@ fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
 fn regression_heartbeats_cannot_keep_a_lease_past_its_lifetime() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let hoarder = q.register("hoarder", 2, false, t0);
-    let honest = q.register("honest", 2, false, t0);
+    let hoarder = q.register("hoarder", 2, false, t0).unwrap();
+    let honest = q.register("honest", 2, false, t0).unwrap();
     q.submit(tasks(1..=2));
     q.lease(hoarder, 2, t0).unwrap();
     let mut now = t0;
@@ -347,7 +347,7 @@ fn check_task(n: u64) -> Task {
 fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let claimant = q.register("claimant", 4, false, t0);
+    let claimant = q.register("claimant", 4, false, t0).unwrap();
     let rx = q.submit(tasks(1..=1));
     q.lease(claimant, 1, t0).unwrap();
     q.report(claimant, T1, ok(), 0.1).unwrap();
@@ -360,7 +360,7 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
     );
     let orphans = q.orphan_checks(t0);
     assert_eq!(orphans.len(), 1, "no other worker: the coordinator's");
-    let other = q.register("other", 1, true, t0);
+    let other = q.register("other", 1, true, t0).unwrap();
     assert!(
         q.orphan_checks(t0).is_empty(),
         "another worker may take it now"
@@ -390,8 +390,8 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
 fn a_quarantined_worker_loses_its_leases_and_is_refused() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let liar = q.register("liar", 2, false, t0);
-    let honest = q.register("honest", 2, false, t0);
+    let liar = q.register("liar", 2, false, t0).unwrap();
+    let honest = q.register("honest", 2, false, t0).unwrap();
     let rx = q.submit(tasks(1..=2));
     assert_eq!(ids(&q.lease(liar, 2, t0).unwrap().0), [1, 2]);
     q.quarantine(liar);
@@ -411,4 +411,29 @@ fn a_quarantined_worker_loses_its_leases_and_is_refused() {
     q.report(honest, T1, ok(), 0.1).unwrap();
     assert_eq!(rx.try_recv().unwrap().origin, Origin::Claim(honest));
     assert!(q.is_quarantined(liar) && !q.is_quarantined(honest));
+}
+
+/// Issue 12, item 6: registrations were unbounded (each a few hundred bytes until dropped as
+/// silent). At most MAX_WORKERS outside workers are registered at once; the coordinator's own
+/// trusted workers are never shut out, and room comes back as silent workers are dropped.
+#[test]
+fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    for i in 0..MAX_WORKERS {
+        q.register(&format!("w{i}"), 1, false, t0).unwrap();
+    }
+    assert_eq!(
+        q.register("one more", 1, false, t0),
+        Err(QueueError::TooManyWorkers)
+    );
+    assert!(
+        q.register("local-0", 1, true, t0).is_ok(),
+        "trusted: never shut out"
+    );
+    q.reap(t0 + rules().worker_timeout);
+    assert!(
+        q.register("after", 1, false, t0 + rules().worker_timeout)
+            .is_ok()
+    );
 }
