@@ -1,0 +1,169 @@
+//! The run loop: initial populations, then epochs (breeding and evaluation, migration, a
+//! resolution switch when progress stalls) until a stopping rule holds, with everything written as
+//! it happens. What changes the search is in `search.rs`, one batch of evaluations in `batch.rs`.
+
+mod batch;
+mod search;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use amorph::task::Scene;
+use tracing::info;
+
+use crate::config::RunConfig;
+use crate::evaluator::{Evaluator, EvaluatorError};
+use crate::progress::Progress;
+use crate::results::ResultWriter;
+use crate::search::DiversityLog;
+use crate::store::{RunStore, StoreError};
+use crate::summary::{RunSummary, StopReason};
+use crate::verification::VerificationError;
+use search::{Search, record_epoch};
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Evaluator(#[from] EvaluatorError),
+    #[error("results: {0}")]
+    Results(#[from] std::io::Error),
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    #[error("resume: {0}")]
+    Replay(String),
+}
+
+impl From<VerificationError> for RunError {
+    fn from(e: VerificationError) -> Self {
+        match e {
+            VerificationError::Evaluator(e) => Self::Evaluator(e),
+            VerificationError::Store(e) => Self::Store(e),
+        }
+    }
+}
+
+/// What a run needs besides its config and evaluator.
+#[derive(Clone, Copy, Debug)]
+pub struct RunContext<'a> {
+    /// Every evaluation, epoch and migration goes here as it happens; a resumed run replays from it.
+    pub store: &'a RunStore,
+    /// Set (e.g. by Ctrl-C) to stop at the next epoch boundary or mid-batch.
+    pub shutdown: &'a AtomicBool,
+    pub progress: &'a Progress,
+}
+
+pub type Result<T> = std::result::Result<T, RunError>;
+
+/// Runs a whole search with the given evaluator. Results are written as the run goes (history per
+/// epoch, best design when it improves, every evaluation to the run store) so an interrupted run
+/// keeps what it finished; a store holding an earlier session's evaluations is replayed first.
+pub fn run(
+    config: &RunConfig,
+    evaluator: &mut dyn Evaluator,
+    ctx: &RunContext<'_>,
+) -> Result<RunSummary> {
+    let schedule = &config.raw.resolution;
+    let scene = Arc::new(config.raw.scene.clone());
+    let mut writer = ResultWriter::create(config)?;
+    let mut diversity = DiversityLog::create(writer.dir())?;
+    let mut history = Vec::new();
+    let mut search = Search::start(config, scene.clone(), evaluator, ctx)?;
+
+    let stop = loop {
+        let dims = schedule.dims(search.resolution.level);
+        if let Some(reason) = stop_reason(config, &scene, &search, ctx.shutdown) {
+            break reason;
+        }
+        let replacements = search.epoch(config, dims, evaluator, ctx)?;
+        for row in search.history_rows(&scene, dims, &replacements) {
+            writer.history(&row)?;
+            history.push(row);
+        }
+        let migrations = search.migrate(config);
+        record_epoch(&search, &migrations, dims, ctx.store)?;
+        diversity.record(
+            search.epoch,
+            search.evaluations,
+            &search.islands,
+            &scene,
+            dims,
+        )?;
+
+        let best = search.best();
+        writer.best_so_far(best, dims)?;
+        let island_bests: Vec<Option<String>> = search
+            .islands
+            .iter()
+            .map(|i| scene.headline(&i.best().outcome))
+            .collect();
+        let status = evaluator.status();
+        ctx.progress.epoch(
+            search.epoch,
+            scene.headline(&best.outcome),
+            dims,
+            &island_bests,
+            status.as_deref(),
+        );
+        info!(
+            epoch = search.epoch,
+            evaluations = search.evaluations,
+            resolution = %dims,
+            best = scene.headline(&best.outcome).as_deref().unwrap_or("-"),
+            islands = ?island_bests,
+            cluster = status.as_deref().unwrap_or("-"),
+            "epoch done"
+        );
+        search.switch_if_stalled(config, evaluator, ctx)?;
+    };
+
+    let dims = schedule.dims(search.resolution.level);
+    let summary = RunSummary {
+        stop,
+        epochs: search.epoch,
+        evaluations: search.evaluations,
+        wall_seconds: search.clock.seconds(),
+        dims,
+        populations: search.islands.into_iter().map(|i| i.population).collect(),
+        history,
+    };
+    writer.finish(&summary, &scene)?;
+    ctx.progress.finish(&summary);
+    Ok(summary)
+}
+
+fn stop_reason(
+    config: &RunConfig,
+    scene: &Scene,
+    search: &Search,
+    shutdown: &AtomicBool,
+) -> Option<StopReason> {
+    let budget = &config.raw.budget;
+    if shutdown.load(Ordering::Relaxed) {
+        return Some(StopReason::Shutdown);
+    }
+    if budget
+        .evaluations
+        .is_some_and(|max| search.evaluations >= max)
+    {
+        return Some(StopReason::EvaluationBudget);
+    }
+    // While replaying what an earlier session recorded, only that session's own stopping rules
+    // apply: it went on, so this session goes on too.
+    let replaying = search.replay_until.is_some_and(|last| search.epoch < last);
+    if !replaying
+        && budget
+            .wall_seconds
+            .is_some_and(|max| search.clock.seconds() >= max)
+    {
+        return Some(StopReason::WallTime);
+    }
+    // The task's stop rule, at the final resolution only (a coarse level's error is not the
+    // design's).
+    if let Some(target) = budget.target_rms_percent
+        && search.resolution.is_final(&config.raw.resolution)
+        && scene.meets_target(&search.best().outcome, target)
+    {
+        return Some(StopReason::TargetReached);
+    }
+    None
+}

@@ -1,0 +1,366 @@
+//! The state of a search between epochs and the four things that change it: the initial
+//! populations, an epoch (breed, evaluate, settle, apply), migration, and the switch to the next
+//! resolution. Each is a function of the seed and the outcomes alone, so a replay from the run
+//! store retraces it exactly.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+use amorph::genome::Genome;
+use amorph::task::{Outcome, Scene};
+use amorph::voxel::GridDims;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use tracing::info;
+
+use super::batch::{evaluate_all, settle};
+use super::{Result, RunContext, RunError};
+use crate::config::RunConfig;
+use crate::evaluator::Evaluator;
+use crate::ids::IslandId;
+use crate::search::{Breeding, Individual, Island, ResolutionState, migrate};
+use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
+use crate::summary::{HistoryRow, fittest};
+use crate::verification::{self, Evaluated};
+
+pub(super) struct Search {
+    pub(super) islands: Vec<Island>,
+    migration_rng: ChaCha8Rng,
+    pub(super) resolution: ResolutionState,
+    pub(super) epoch: usize,
+    pub(super) evaluations: u64,
+    pub(super) next_task: u64,
+    /// Outcomes of an earlier, interrupted session of this run, by task id (see [`crate::store`]).
+    pub(super) replay: HashMap<u64, StoredEvaluation>,
+    /// The last epoch that session recorded: up to it the replay must match the store exactly.
+    pub(super) replay_until: Option<usize>,
+    pub(super) clock: RunClock,
+    breeding: Breeding,
+}
+
+/// Wall time of the run across sessions: what earlier sessions used plus this session's time.
+pub(super) struct RunClock {
+    started: Instant,
+    earlier: f64,
+}
+
+impl RunClock {
+    pub(super) fn seconds(&self) -> f64 {
+        self.earlier + self.started.elapsed().as_secs_f64()
+    }
+}
+
+impl Search {
+    /// Draws and evaluates the initial populations (island i from stream i + 1 of the run seed;
+    /// stream 0 drives migration), replaying what the store already holds.
+    pub(super) fn start(
+        config: &RunConfig,
+        scene: Arc<Scene>,
+        evaluator: &mut dyn Evaluator,
+        ctx: &RunContext<'_>,
+    ) -> Result<Self> {
+        let raw = &config.raw;
+        let breeding = Breeding {
+            mutation: raw.search.mutation.clone(),
+            variation: raw.search.variation(),
+            scene,
+        };
+        let island_rng = |i: usize| {
+            let mut rng = ChaCha8Rng::seed_from_u64(raw.seed);
+            rng.set_stream(i as u64 + 1);
+            rng
+        };
+        let mut migration_rng = ChaCha8Rng::seed_from_u64(raw.seed);
+        migration_rng.set_stream(0);
+
+        let mut rngs: Vec<ChaCha8Rng> = (0..raw.search.islands).map(island_rng).collect();
+        let initial: Vec<Vec<Genome>> = rngs
+            .iter_mut()
+            .map(|rng| {
+                Island::initial_genomes(
+                    rng,
+                    raw.search.population,
+                    raw.search.initial_points,
+                    &breeding,
+                )
+            })
+            .collect();
+        let replay = ctx.store.evaluations()?;
+        let replay_until = ctx.store.last_epoch()?;
+        if !replay.is_empty() {
+            info!(evaluations = replay.len(), last_epoch = ?replay_until, "resuming: replaying the stored run");
+        }
+        let mut search = Search {
+            islands: Vec::new(),
+            migration_rng,
+            resolution: ResolutionState::new(),
+            epoch: 0,
+            evaluations: 0,
+            next_task: 0,
+            replay,
+            replay_until,
+            clock: RunClock {
+                started: Instant::now(),
+                earlier: ctx.store.recorded_wall_seconds()?,
+            },
+            breeding,
+        };
+        let dims = raw.resolution.dims(0);
+        let batch = evaluate_all(
+            &mut search,
+            evaluator,
+            &initial,
+            dims,
+            Purpose::Initial,
+            ctx,
+        )?;
+        let outcomes = settle(
+            batch,
+            &initial,
+            dims,
+            evaluator,
+            ctx,
+            &verification::all_decide,
+        )?;
+        search.islands = initial
+            .into_iter()
+            .zip(outcomes)
+            .zip(rngs)
+            .enumerate()
+            .map(|(i, ((genomes, outcomes), rng))| {
+                let population = genomes
+                    .into_iter()
+                    .zip(outcomes)
+                    .map(|(genome, (task, outcome))| Individual {
+                        genome,
+                        outcome,
+                        task,
+                    })
+                    .collect();
+                Island::from_evaluated(IslandId(i as u32), rng, population)
+            })
+            .collect();
+        Ok(search)
+    }
+
+    /// One epoch: every island breeds from its snapshot, all children are evaluated as one
+    /// batch, and each island applies its own. The last epoch is shortened (spread over the
+    /// islands) so the run ends exactly on budget. Returns each island's replacements.
+    pub(super) fn epoch(
+        &mut self,
+        config: &RunConfig,
+        dims: GridDims,
+        evaluator: &mut dyn Evaluator,
+        ctx: &RunContext<'_>,
+    ) -> Result<Vec<usize>> {
+        let raw = &config.raw;
+        let islands = self.islands.len();
+        let left = raw
+            .budget
+            .evaluations
+            .map_or(u64::MAX, |max| max.saturating_sub(self.evaluations));
+        let breeding = &self.breeding;
+        let children: Vec<_> = self
+            .islands
+            .iter_mut()
+            .enumerate()
+            .map(|(i, island)| {
+                let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
+                let count = (raw.search.children_per_epoch as u64).min(share) as usize;
+                island.breed(count, breeding, dims)
+            })
+            .collect();
+        let genomes: Vec<Vec<Genome>> = children
+            .iter()
+            .map(|c| c.iter().map(|c| c.genome.clone()).collect())
+            .collect();
+        let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Child, ctx)?;
+        // A child's outcome decides when it would replace its dominant parent.
+        let winners = |batch: &[Vec<Evaluated>]| -> Vec<Vec<bool>> {
+            self.islands
+                .iter()
+                .zip(&children)
+                .zip(batch)
+                .map(|((island, children), group)| {
+                    let outcomes: Vec<&Outcome> = group.iter().map(|e| &e.outcome).collect();
+                    island.winners(children, &outcomes)
+                })
+                .collect()
+        };
+        let outcomes = settle(batch, &genomes, dims, evaluator, ctx, &winners)?;
+        self.epoch += 1;
+        Ok(self
+            .islands
+            .iter_mut()
+            .zip(children)
+            .zip(outcomes)
+            .map(|((island, children), outcomes)| island.apply(children, outcomes))
+            .collect())
+    }
+
+    /// Migration, when this epoch is one of its interval's.
+    pub(super) fn migrate(&mut self, config: &RunConfig) -> Vec<MigrationRecord> {
+        let migration = &config.raw.search.migration;
+        let mut migrations = Vec::new();
+        if migration.interval > 0 && self.epoch.is_multiple_of(migration.interval) {
+            for event in migrate(&mut self.islands, migration, &mut self.migration_rng) {
+                info!(epoch = self.epoch, from = %event.from, to = %event.to, emigrant = event.emigrant, replaced = ?event.replaced, task = %event.task, "migration");
+                migrations.push(MigrationRecord {
+                    from: event.from.0,
+                    to: event.to.0,
+                    emigrant_slot: event.emigrant,
+                    replaced_slot: event.replaced,
+                    task_id: event.task.0,
+                });
+            }
+        }
+        migrations
+    }
+
+    /// Moves to the next resolution once progress stalls there, re-evaluating every population.
+    /// With less budget left than that re-evaluation, the run ends at the current level rather
+    /// than overshoot its evaluation budget.
+    pub(super) fn switch_if_stalled(
+        &mut self,
+        config: &RunConfig,
+        evaluator: &mut dyn Evaluator,
+        ctx: &RunContext<'_>,
+    ) -> Result<()> {
+        let schedule = &config.raw.resolution;
+        let population_total: u64 = self.islands.iter().map(|i| i.population.len() as u64).sum();
+        let switch_affordable = config
+            .raw
+            .budget
+            .evaluations
+            .is_none_or(|max| max.saturating_sub(self.evaluations) >= population_total);
+        let best = self.best().outcome.rank();
+        if !(switch_affordable && self.resolution.observe(best, schedule)) {
+            return Ok(());
+        }
+        let dims = schedule.dims(self.resolution.level);
+        info!(epoch = self.epoch, resolution = %dims, "progress stalled: re-evaluating at the next resolution");
+        let genomes: Vec<Vec<Genome>> = self
+            .islands
+            .iter()
+            .map(|i| i.population.iter().map(|ind| ind.genome.clone()).collect())
+            .collect();
+        let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Reevaluation, ctx)?;
+        let outcomes = settle(
+            batch,
+            &genomes,
+            dims,
+            evaluator,
+            ctx,
+            &verification::all_decide,
+        )?;
+        for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
+            for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
+                ind.outcome = outcome;
+                ind.task = task;
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn best(&self) -> &Individual {
+        fittest(self.islands.iter().map(|i| i.best()))
+    }
+
+    /// Each island's line of `history.csv` for the epoch just applied.
+    pub(super) fn history_rows(
+        &self,
+        scene: &Scene,
+        dims: GridDims,
+        replacements: &[usize],
+    ) -> Vec<HistoryRow> {
+        let wall = self.clock.seconds();
+        self.islands
+            .iter()
+            .zip(replacements)
+            .map(|(island, &replacements)| {
+                history_row(
+                    scene,
+                    island,
+                    self.epoch,
+                    self.evaluations,
+                    wall,
+                    dims,
+                    replacements,
+                )
+            })
+            .collect()
+    }
+}
+
+/// Stores the end of an epoch. While replaying, first checks the replayed populations against the
+/// ones the earlier session recorded: any difference means the store is not this run's.
+pub(super) fn record_epoch(
+    search: &Search,
+    migrations: &[MigrationRecord],
+    dims: GridDims,
+    store: &RunStore,
+) -> Result<()> {
+    let populations: Vec<Vec<(u64, Option<f64>)>> = search
+        .islands
+        .iter()
+        .map(|i| {
+            i.population
+                .iter()
+                .map(|ind| (ind.task.0, ind.outcome.fitness()))
+                .collect()
+        })
+        .collect();
+    if search.replay_until.is_some_and(|last| search.epoch <= last) {
+        let stored = store.population(search.epoch)?;
+        let replayed: Vec<Vec<u64>> = populations
+            .iter()
+            .map(|p| p.iter().map(|&(t, _)| t).collect())
+            .collect();
+        if stored != replayed {
+            return Err(RunError::Replay(format!(
+                "the replayed populations of epoch {} differ from the ones {} recorded",
+                search.epoch,
+                store.path().display()
+            )));
+        }
+    }
+    store.record_epoch(&EpochRecord {
+        epoch: search.epoch,
+        evaluations: search.evaluations,
+        wall_seconds: search.clock.seconds(),
+        resolution: dims.to_string(),
+        best_fitness: search.best().outcome.fitness(),
+        populations,
+        migrations,
+    })?;
+    Ok(())
+}
+
+fn history_row(
+    scene: &Scene,
+    island: &Island,
+    epoch: usize,
+    evaluations: u64,
+    wall_seconds: f64,
+    dims: GridDims,
+    replacements: usize,
+) -> HistoryRow {
+    let best = island.best();
+    let valid: Vec<f64> = island
+        .population
+        .iter()
+        .filter_map(|i| i.outcome.fitness())
+        .collect();
+    HistoryRow {
+        epoch,
+        evaluations,
+        wall_seconds,
+        resolution: dims.to_string(),
+        island: island.id.0,
+        best_fitness: best.outcome.fitness(),
+        best_figure: scene.figure(&best.outcome),
+        mean_fitness: (!valid.is_empty()).then(|| valid.iter().sum::<f64>() / valid.len() as f64),
+        replacements,
+    }
+}
