@@ -32,7 +32,6 @@ pub struct Individual {
 pub struct Child {
     pub genome: Genome,
     pub dominant_parent: usize,
-    pub parents: [usize; 2],
     /// A nudge of the island's best (local search) rather than a crossover child.
     pub nudge: bool,
 }
@@ -127,7 +126,6 @@ impl Island {
             children.push(Child {
                 genome,
                 dominant_parent: best,
-                parents: [best, best],
                 nudge: true,
             });
         }
@@ -172,7 +170,6 @@ impl Island {
         Child {
             genome,
             dominant_parent,
-            parents: [a, b],
             nudge: false,
         }
     }
@@ -246,6 +243,7 @@ impl Island {
         worst
     }
 
+    #[cfg(test)]
     pub fn rng_mut(&mut self) -> &mut ChaCha8Rng {
         &mut self.rng
     }
@@ -262,7 +260,6 @@ mod tests {
         Child {
             genome: point_at(x),
             dominant_parent,
-            parents: [dominant_parent, dominant_parent],
             nudge: false,
         }
     }
@@ -344,7 +341,7 @@ mod tests {
         assert_eq!(children.iter().filter(|c| c.nudge).count(), 3);
         assert!(children[..3].iter().all(|c| !c.nudge), "nudges come last");
         for c in &children[3..] {
-            assert_eq!((c.dominant_parent, c.parents), (1, [1, 1]));
+            assert_eq!(c.dominant_parent, 1);
             assert_eq!(c.genome.len(), best.len());
             for (p, q) in c.genome.points.iter().zip(&best.points) {
                 assert_eq!(p.material, q.material);
