@@ -53,6 +53,8 @@ struct WorkerState {
     leased: HashSet<TaskId>,
     /// In this process (or trusted by config): its outcomes are final without a check.
     trusted: bool,
+    /// When it last asked for work.
+    last_asked: Instant,
 }
 
 /// A registered worker that has just been heard from: `now` is its last sign of life.
@@ -83,8 +85,6 @@ struct State {
     highest_task: [Option<TaskId>; 2],
     /// Workers caught disagreeing with a check: every later call of theirs is refused.
     quarantined: HashSet<WorkerId>,
-    /// When the current batch was submitted.
-    submitted: Instant,
     completions: Option<Sender<Completion>>,
     noted_errors: Vec<NotedError>,
     run_finished: bool,
@@ -118,7 +118,6 @@ impl TaskQueue {
                 earlier: HashMap::new(),
                 highest_task: [None, None],
                 quarantined: HashSet::new(),
-                submitted: Instant::now(),
                 completions: None,
                 noted_errors: Vec::new(),
                 run_finished: false,
@@ -181,6 +180,7 @@ impl TaskQueue {
                 last_seen: now,
                 leased: HashSet::new(),
                 trusted,
+                last_asked: now,
             },
         );
         info!(worker = %id, name, capacity, trusted, "worker registered");
@@ -204,6 +204,10 @@ impl TaskQueue {
             return Ok((Vec::new(), true));
         }
         let room = w.capacity.saturating_sub(w.leased.len() as u32).min(max) as usize;
+        // Asking for nothing is not asking: only a call with room counts as a worker at work.
+        if room > 0 {
+            w.last_asked = now;
+        }
         let chosen: Vec<TaskId> = s
             .queued
             .iter()
@@ -421,29 +425,34 @@ impl TaskQueue {
             s.tasks.insert(id, TaskState::new(task, slot, excluded));
         }
         s.completions = Some(tx);
-        s.submitted = Instant::now();
         drop(guard);
         self.work.notify_waiters();
         rx
     }
 
-    /// Queued check tasks that no live worker may take (each is kept from its claimant, and the
-    /// others failed it, or there are none), or that no one has taken for a lease's length since
-    /// the batch was submitted (a worker may be alive and never ask): the coordinator evaluates
-    /// them itself and hands the outcome to [`TaskQueue::finish_here`].
+    /// Queued check tasks that came back from a lease (its holder went silent, gave it back or
+    /// held it past its lease), or that no worker at work may take: each is kept from its
+    /// claimant, and the others failed it, or there are none, or they neither hold a lease nor
+    /// have asked for work within a lease's length (a worker may be alive and never ask). So no
+    /// worker can hold a check back for longer than one lease. The coordinator evaluates these
+    /// itself and hands the outcome to [`TaskQueue::finish_here`].
     pub fn orphan_checks(&self, now: Instant) -> Vec<Arc<Task>> {
         let s = self.lock();
-        let waited = now.saturating_duration_since(s.submitted) >= self.rules.lease;
+        let working = |w: &WorkerState| {
+            w.capacity > 0
+                && (!w.leased.is_empty()
+                    || now.saturating_duration_since(w.last_asked) < self.rules.lease)
+        };
         s.queued
             .iter()
             .map(|id| &s.tasks[id])
             .filter(|t| t.task.id.is_check())
             .filter(|t| {
-                waited
+                !t.leased_to.is_empty()
                     || !s
                         .workers
                         .iter()
-                        .any(|(&w, ws)| ws.capacity > 0 && t.may_take(w))
+                        .any(|(&w, ws)| working(ws) && t.may_take(w))
             })
             .map(|t| t.task.clone())
             .collect()

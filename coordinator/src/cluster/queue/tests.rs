@@ -365,13 +365,39 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
         q.orphan_checks(t0).is_empty(),
         "another worker may take it now"
     );
-    let later = Instant::now() + rules().lease;
+    let later = t0 + rules().lease;
     assert_eq!(
         q.orphan_checks(later).len(),
         1,
-        "unless no one takes it for a lease"
+        "unless it has not asked for work for a lease's length"
     );
-    assert_eq!(q.lease(other, 1, t0).unwrap().0.len(), 1);
+    q.heartbeat(other, &[], later).unwrap();
+    assert_eq!(q.orphan_checks(later).len(), 1, "a heartbeat is not asking");
+    q.lease(claimant, 1, later).unwrap();
+    assert_eq!(
+        q.orphan_checks(later).len(),
+        1,
+        "nor is the claimant's asking"
+    );
+    assert!(q.lease(other, 0, later).unwrap().0.is_empty());
+    assert_eq!(
+        q.orphan_checks(later).len(),
+        1,
+        "asking for nothing is not asking"
+    );
+    assert_eq!(q.lease(other, 1, later).unwrap().0.len(), 1);
+    assert!(q.orphan_checks(later).is_empty(), "taken");
+    assert_eq!(q.release(other, &[orphans[0].id]), Ok(1));
+    assert_eq!(
+        q.orphan_checks(later).len(),
+        1,
+        "back from a lease: the coordinator's"
+    );
+    assert_eq!(
+        q.lease(other, 1, later).unwrap().0.len(),
+        1,
+        "unless a worker is quicker"
+    );
     q.report(other, orphans[0].id, ok(), 0.1).unwrap();
     let done = rx.try_recv().unwrap();
     assert_eq!(done.origin, Origin::Trusted, "a trusted worker's outcome");
