@@ -66,6 +66,18 @@ pub struct Verdict {
     pub liars: Vec<WorkerId>,
 }
 
+impl Verdict {
+    /// A check that agreed with its claim: the claim holds and nobody lied.
+    pub fn agreed(outcome: Outcome, checker: String) -> Self {
+        Self {
+            outcome,
+            agreed: true,
+            checker,
+            liars: Vec::new(),
+        }
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum EvaluatorError {
     #[error("evaluator stopped: {0}")]
@@ -88,12 +100,7 @@ pub trait Evaluator {
     fn check(&mut self, claims: &[Claim]) -> Result<Vec<Verdict>, EvaluatorError> {
         Ok(claims
             .iter()
-            .map(|c| Verdict {
-                outcome: c.outcome.clone(),
-                agreed: true,
-                checker: "none".into(),
-                liars: Vec::new(),
-            })
+            .map(|c| Verdict::agreed(c.outcome.clone(), "none".into()))
             .collect())
     }
 

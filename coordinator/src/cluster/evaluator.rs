@@ -52,8 +52,9 @@ impl ClusterEvaluator {
         self.stats
     }
 
-    /// Waits for one completion per task of the batch just submitted on `done`; check tasks that
-    /// no live worker may take are evaluated here.
+    /// Waits for one completion per task of the batch just submitted on `done`; in a batch of
+    /// checks, those no worker at work may take are evaluated here (a search batch has none, so
+    /// its wait does not scan the queue).
     fn collect(
         &mut self,
         tasks: &[Task],
@@ -62,6 +63,7 @@ impl ClusterEvaluator {
     ) -> Result<Vec<Completion>, EvaluatorError> {
         let mut completions: Vec<Option<Completion>> = vec![None; tasks.len()];
         let mut remaining = tasks.len();
+        let checks = tasks.first().is_some_and(|t| t.id.is_check());
         while remaining > 0 {
             match done.recv_timeout(Duration::from_millis(100)) {
                 Ok(completion) => {
@@ -79,7 +81,12 @@ impl ClusterEvaluator {
                             tasks.len()
                         )));
                     }
-                    for task in self.queue.orphan_checks(Instant::now()) {
+                    let orphans = if checks {
+                        self.queue.orphan_checks(Instant::now())
+                    } else {
+                        Vec::new()
+                    };
+                    for task in orphans {
                         let started = Instant::now();
                         let outcome = self.scene.evaluate(&task.genome, task.dims);
                         self.stats.by_coordinator += 1;
@@ -178,12 +185,7 @@ impl Evaluator for ClusterEvaluator {
                 if check.origin != Origin::GaveUp
                     && outcome_text(&claim.outcome) == outcome_text(&check.outcome)
                 {
-                    Verdict {
-                        outcome: claim.outcome.clone(),
-                        agreed: true,
-                        checker: check.worker.clone(),
-                        liars: Vec::new(),
-                    }
+                    Verdict::agreed(claim.outcome.clone(), check.worker.clone())
                 } else {
                     self.settle(claim, check)
                 }
