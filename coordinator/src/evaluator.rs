@@ -104,9 +104,10 @@ pub trait Evaluator {
             .collect())
     }
 
-    /// Whether `worker` was caught disagreeing with a check (its other outcomes are then checked
-    /// too before they count).
-    fn is_quarantined(&self, _worker: WorkerId) -> bool {
+    /// Whether every outcome `worker` claims is checked, not only those that would change a
+    /// population: it was caught disagreeing with a check, or the run checks every claim
+    /// (`cluster.verify = "all"`).
+    fn doubts_every_claim_of(&self, _worker: WorkerId) -> bool {
         false
     }
 

@@ -4,14 +4,16 @@
 
 use std::net::SocketAddr;
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
 use tokio::sync::watch;
 use tracing::{info, warn};
 
-use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Trust};
+use crate::cluster::{
+    self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Trust, Verify,
+};
 use crate::config::RunConfig;
 use crate::progress::Progress;
 use crate::run::{RunContext, RunError, run};
@@ -106,7 +108,7 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     // Listen before touching the run store, so a port in use leaves no store behind to demand
     // --resume or --fresh on the retry.
     let queue = Arc::new(TaskQueue::new(settings.rules.clone()));
-    let trust = if settings.verify {
+    let trust = if settings.verify != Verify::Off {
         Trust::local()
     } else {
         Trust::Everyone
@@ -166,7 +168,8 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
         queue.clone(),
         options.shutdown.clone(),
         Arc::new(config.raw.scene.clone()),
-    );
+    )
+    .checking_every_claim(settings.verify == Verify::All);
     let ctx = RunContext {
         store: &store,
         shutdown: &options.shutdown,
@@ -186,10 +189,10 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     // Wind down. Only a run that ended tells workers it finished (so they exit): after a stop or
     // a failure the run is not over, and external workers should wait to serve its resumption.
     // A run stopped at an epoch boundary returns Ok with `StopReason::Shutdown`: not finished either.
-    if result
+    let finished = result
         .as_ref()
-        .is_ok_and(|summary| summary.stop != StopReason::Shutdown)
-    {
+        .is_ok_and(|summary| summary.stop != StopReason::Shutdown);
+    if finished {
         queue.finish();
     }
     let _ = stop_workers.send(true);
@@ -202,8 +205,27 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
                 Err(_) => warn!("local worker did not stop in time"),
             }
         }
+        if finished {
+            farewell(&queue, &options.shutdown).await;
+        }
         server.shutdown().await;
     });
     runtime.shutdown_timeout(Duration::from_secs(1));
     Ok(result?)
+}
+
+/// Keeps serving until every outside worker has heard that the run finished, so it exits rather
+/// than retrying a closed port (and, with `give_up_after`, failing). A worker between two calls
+/// hears it on its next heartbeat; one that never calls again is dropped by the reaper after
+/// `worker_timeout`, which bounds the wait. Ctrl-C ends it at once.
+async fn farewell(queue: &TaskQueue, shutdown: &AtomicBool) {
+    let rules = queue.rules();
+    let deadline = tokio::time::Instant::now() + rules.worker_timeout + rules.heartbeat_interval;
+    let poll = (rules.heartbeat_interval / 4).max(Duration::from_millis(10));
+    while !queue.everyone_told()
+        && !shutdown.load(Ordering::Relaxed)
+        && tokio::time::Instant::now() < deadline
+    {
+        tokio::time::sleep(poll).await;
+    }
 }

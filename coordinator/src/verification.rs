@@ -64,7 +64,7 @@ pub fn confirm(
         for (g, group) in batch.iter().enumerate() {
             for (i, e) in group.iter().enumerate() {
                 let Some(claimant) = e.claimant else { continue };
-                if deciding[g][i] || evaluator.is_quarantined(claimant) {
+                if deciding[g][i] || evaluator.doubts_every_claim_of(claimant) {
                     at.push((g, i));
                     claims.push(Claim {
                         task: Task {
@@ -145,7 +145,7 @@ mod tests {
                 .collect())
         }
 
-        fn is_quarantined(&self, worker: WorkerId) -> bool {
+        fn doubts_every_claim_of(&self, worker: WorkerId) -> bool {
             self.quarantined.contains(&worker)
         }
     }

@@ -455,3 +455,61 @@ fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined()
     );
     assert_eq!(quarantined, 1);
 }
+
+/// Issue 12, item 3, beyond the population: with `verify = true` a worker may still claim a
+/// *worse* outcome than the truth for a child, which then loses without a check. With
+/// `cluster.verify = "all"` every outside claim is checked, so a worker that is honest about the
+/// initial population (every one of which is checked anyway) and then calls every child it is
+/// given a failure is caught, quarantined, and the run ends as a clean run.
+#[test]
+fn regression_with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
+    let expected = reference();
+    let mut config = small_beam_config(&scratch_dir("hostile-verify-all"), EVALUATIONS, SEED);
+    config.raw.cluster.verify = amorph_coordinator::cluster::Verify::All;
+    let initial = (config.raw.search.population * config.raw.search.islands) as usize;
+    let run = ClusterRun::start(&config, 0, None);
+    let honest = runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, initial as u32, "liar").await;
+        for task in lease(&mut c, &liar, initial).await {
+            let truth = evaluate(&mut c, &task).await;
+            let r = c
+                .report(report(
+                    &liar,
+                    task.task_id,
+                    task_result::Result::Outcome(truth),
+                ))
+                .await
+                .unwrap()
+                .into_inner();
+            assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
+        }
+        // The first epoch's children: every one claimed a failure, whatever it really is.
+        let children = lease(&mut c, &liar, 4).await;
+        let mut lies = 0;
+        for task in &children {
+            let failed = convert::outcome_to_wire(&amorph::task::Outcome::failed(
+                amorph::outcome::Failure::Empty,
+            ));
+            lies += usize::from(evaluate(&mut c, task).await != failed);
+            c.report(report(
+                &liar,
+                task.task_id,
+                task_result::Result::Outcome(failed),
+            ))
+            .await
+            .unwrap();
+        }
+        assert!(lies > 0, "every child really failed: nothing was a lie");
+        (TestWorker::start(&run.url(), 2, None), children.len())
+    });
+    let (honest, children) = honest;
+    let store = run.store.clone();
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+    let (checks, disagreed, quarantined) =
+        amorph_coordinator::store::RunStore::peek_verification(&store).unwrap();
+    assert!(checks as usize >= initial + children, "{checks} checks");
+    assert!(disagreed >= 1, "{disagreed} disagreed");
+    assert_eq!(quarantined, 1);
+}

@@ -77,6 +77,48 @@ fn a_worker_that_connects_late_joins_the_run() {
 }
 
 #[test]
+fn regression_a_worker_between_two_calls_hears_that_the_run_finished() {
+    // CI once saw a late worker, between two calls when the run ended, find the port closed
+    // and retry for 60 s before failing. A worker that heartbeats slower than the run's last
+    // moments must still be answered `run_finished`, not a closed connection.
+    let config = small_beam_config(&scratch_dir("cluster-farewell"), 60, SEED);
+    let run = ClusterRun::start(&config, 2, None);
+    let rt = runtime();
+    let heard = rt.block_on(async {
+        let mut c = client(&run.url()).await;
+        let worker_id = c
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: 1,
+                name: "bystander".into(),
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .worker_id;
+        for beat in 0.. {
+            // Under the config's 600 ms worker timeout, so the coordinator keeps it registered.
+            tokio::time::sleep(Duration::from_millis(250)).await;
+            let answer = c
+                .heartbeat(v1::HeartbeatRequest {
+                    worker_id: worker_id.clone(),
+                    active_task_ids: Vec::new(),
+                    protocol_version: PROTOCOL_VERSION,
+                })
+                .await
+                .unwrap_or_else(|e| panic!("heartbeat {beat}: {e:?}"));
+            if answer.into_inner().run_finished {
+                return beat;
+            }
+            assert!(beat < 2_000, "no end of the run after {beat} heartbeats");
+        }
+        unreachable!()
+    });
+    assert_eq!(run.join().evaluations, 60);
+    assert!(heard > 0);
+}
+
+#[test]
 fn embedded_local_workers_run_the_real_path() {
     let expected = reference();
     let config = small_beam_config(&scratch_dir("cluster-local"), EVALUATIONS, SEED);

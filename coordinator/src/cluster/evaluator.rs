@@ -23,6 +23,8 @@ pub struct ClusterEvaluator {
     scene: Arc<Scene>,
     next_check: u64,
     stats: CheckStats,
+    /// `cluster.verify = "all"`: check every outside claim, deciding or not.
+    check_all: bool,
 }
 
 /// What verification has cost and found so far in this process.
@@ -45,7 +47,14 @@ impl ClusterEvaluator {
             scene,
             next_check: TaskId::FIRST_CHECK,
             stats: CheckStats::default(),
+            check_all: false,
         }
+    }
+
+    /// Checks every outside worker's outcome, not only those that would change a population.
+    pub fn checking_every_claim(mut self, all: bool) -> Self {
+        self.check_all = all;
+        self
     }
 
     pub fn check_stats(&self) -> CheckStats {
@@ -199,8 +208,8 @@ impl Evaluator for ClusterEvaluator {
         Ok(verdicts)
     }
 
-    fn is_quarantined(&self, worker: WorkerId) -> bool {
-        self.queue.is_quarantined(worker)
+    fn doubts_every_claim_of(&self, worker: WorkerId) -> bool {
+        self.check_all || self.queue.is_quarantined(worker)
     }
 
     fn status(&self) -> Option<String> {

@@ -13,4 +13,4 @@ pub mod status;
 pub use evaluator::ClusterEvaluator;
 pub use queue::{QueueRules, QueueStats, TaskQueue};
 pub use server::{ServerHandle, ServerOptions, Trust, start};
-pub use settings::{ClusterSection, ClusterSettings};
+pub use settings::{ClusterSection, ClusterSettings, Verify};

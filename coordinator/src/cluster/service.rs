@@ -181,7 +181,10 @@ impl EvaluationCoordinator for CoordinatorService {
             if malformed {
                 warn!(%worker, %task, "malformed outcome noted as the worker's error");
             }
-            match self.queue.report(worker, task, outcome, wall) {
+            match self
+                .queue
+                .report(worker, task, outcome, wall, Instant::now())
+            {
                 Ok(d) => dispositions.push(match (d, malformed) {
                     (Disposition::Accepted, _) => v1::ReportDisposition::Accepted,
                     (Disposition::Duplicate, _) => v1::ReportDisposition::Duplicate,

@@ -46,9 +46,54 @@ pub struct ClusterSection {
     pub max_attempts: u32,
     /// Longest a lease lives from its grant, heartbeats or not, ms.
     pub max_lease_ms: u64,
-    /// Check an outside worker's outcome by a second evaluation elsewhere before it may change a
-    /// population (the coordinator's own local workers are trusted). False trusts every worker.
-    pub verify: bool,
+    /// Which outside workers' outcomes are evaluated a second time elsewhere before they count
+    /// (the coordinator's own local workers are trusted): see [`Verify`].
+    pub verify: Verify,
+}
+
+/// `cluster.verify`: `true` (the default) checks an outside worker's outcome when it would change
+/// a population; `"all"` checks every outside outcome, so that a worse outcome than the truth
+/// cannot make a child lose either (about twice the evaluations); `false` trusts every worker.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Verify {
+    Off,
+    #[default]
+    Decisive,
+    All,
+}
+
+impl Serialize for Verify {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Verify::Off => s.serialize_bool(false),
+            Verify::Decisive => s.serialize_bool(true),
+            Verify::All => s.serialize_str("all"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Verify {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Verify;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("cluster.verify: true, false or \"all\"")
+            }
+            fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<Verify, E> {
+                Ok(if v { Verify::Decisive } else { Verify::Off })
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Verify, E> {
+                match v {
+                    "all" => Ok(Verify::All),
+                    _ => Err(E::custom(format!(
+                        "cluster.verify = {v:?}: expected true, false or \"all\""
+                    ))),
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 impl Default for ClusterSection {
@@ -66,7 +111,7 @@ impl Default for ClusterSection {
             worker_timeout_ms: 5000,
             max_attempts: 3,
             max_lease_ms: 3_600_000,
-            verify: true,
+            verify: Verify::Decisive,
         }
     }
 }
@@ -105,7 +150,7 @@ pub struct ClusterSettings {
     pub tls: Option<(PathBuf, PathBuf)>,
     pub tls_domain: String,
     pub rules: QueueRules,
-    pub verify: bool,
+    pub verify: Verify,
 }
 
 /// `cluster.<key>` in milliseconds, between `min` and a day.
@@ -239,6 +284,26 @@ mod tests {
             let err = settings(edit).unwrap_err();
             assert!(err.starts_with(expected), "{err}");
             assert!(!err.contains('\n'));
+        }
+    }
+
+    /// `verify` reads as written and writes back the same (the run store keeps the effective
+    /// config); anything else names the key.
+    #[test]
+    fn verify_is_true_false_or_all() {
+        for (text, verify) in [
+            ("true", Verify::Decisive),
+            ("false", Verify::Off),
+            ("\"all\"", Verify::All),
+        ] {
+            let c: ClusterSection = toml::from_str(&format!("verify = {text}")).unwrap();
+            assert_eq!(c.verify, verify);
+            let back: ClusterSection = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
+            assert_eq!(back, c);
+        }
+        for text in ["\"some\"", "1"] {
+            let err = toml::from_str::<ClusterSection>(&format!("verify = {text}")).unwrap_err();
+            assert!(err.to_string().contains("cluster.verify"), "{err}");
         }
     }
 }

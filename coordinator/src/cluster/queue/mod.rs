@@ -53,8 +53,10 @@ struct WorkerState {
     leased: HashSet<TaskId>,
     /// In this process (or trusted by config): its outcomes are final without a check.
     trusted: bool,
-    /// When it last asked for work.
+    /// When it last asked for work or delivered an outcome (a worker between the two is at work).
     last_asked: Instant,
+    /// A lease or heartbeat has answered it that the run finished.
+    told_finished: bool,
 }
 
 /// A registered worker that has just been heard from: `now` is its last sign of life.
@@ -181,6 +183,7 @@ impl TaskQueue {
                 leased: HashSet::new(),
                 trusted,
                 last_asked: now,
+                told_finished: false,
             },
         );
         info!(worker = %id, name, capacity, trusted, "worker registered");
@@ -201,6 +204,7 @@ impl TaskQueue {
         s.refuse_quarantined(worker)?;
         let w = seen(&mut s.workers, worker, now)?;
         if s.run_finished {
+            w.told_finished = true;
             return Ok((Vec::new(), true));
         }
         let room = w.capacity.saturating_sub(w.leased.len() as u32).min(max) as usize;
@@ -237,6 +241,7 @@ impl TaskQueue {
         task: TaskId,
         result: Result<Outcome, String>,
         wall_seconds: f64,
+        now: Instant,
     ) -> Result<Disposition, QueueError> {
         let mut guard = self.lock();
         if !self.issued(&guard, worker) {
@@ -263,8 +268,14 @@ impl TaskQueue {
         }
         let disposition = match result {
             Ok(outcome) => {
-                let (by, trusted) = match s.workers.get(&worker) {
-                    Some(w) => (format!("{} ({worker})", w.name), w.trusted),
+                let (by, trusted) = match s.workers.get_mut(&worker) {
+                    Some(w) => {
+                        // A worker whose evaluation outlasted a lease has not asked for a lease's
+                        // length, yet it is at work: without this, a check queued meanwhile
+                        // counts as one no worker may take, and the coordinator makes it.
+                        w.last_asked = now;
+                        (format!("{} ({worker})", w.name), w.trusted)
+                    }
                     None => (worker.to_string(), false),
                 };
                 let origin = if trusted {
@@ -311,7 +322,7 @@ impl TaskQueue {
         let mut guard = self.lock();
         let s = &mut *guard;
         s.refuse_quarantined(worker)?;
-        seen(&mut s.workers, worker, now)?;
+        seen(&mut s.workers, worker, now)?.told_finished |= s.run_finished;
         let mut revoked = Vec::new();
         for &id in active {
             match s.tasks.get_mut(&id).map(|t| &mut t.phase) {
@@ -516,6 +527,14 @@ impl TaskQueue {
 
     pub fn is_finished(&self) -> bool {
         self.lock().run_finished
+    }
+
+    /// After [`TaskQueue::finish`]: whether every registered worker has been told, so the server
+    /// may close. A worker that never calls again stops counting once the reaper drops it, a
+    /// `worker_timeout` after its last call (a quarantined one is dropped at once).
+    pub fn everyone_told(&self) -> bool {
+        let s = self.lock();
+        s.run_finished && s.workers.values().all(|w| w.told_finished)
     }
 
     pub fn stats(&self) -> QueueStats {

@@ -107,6 +107,7 @@ impl Seen {
         worker: WorkerId,
         task: TaskId,
         error: bool,
+        now: Instant,
     ) -> Result<(), TestCaseError> {
         self.reports += 1;
         let outcome = Outcome::failed(Failure::Internal(format!("report {}", self.reports)));
@@ -118,7 +119,7 @@ impl Seen {
         let finished_before = self
             .completed
             .contains_key(&(task.0 as usize).wrapping_sub(1));
-        let d = q.report(worker, task, result, 0.0);
+        let d = q.report(worker, task, result, 0.0, now);
         if let Ok(Disposition::Accepted) = d {
             prop_assert!(!finished_before, "{task} accepted after it finished");
             prop_assert!(
@@ -176,7 +177,7 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                 error,
             } => {
                 if let Some(w) = pick(&workers, worker) {
-                    seen.report(&q, w, TaskId(task), error)?;
+                    seen.report(&q, w, TaskId(task), error, now)?;
                 }
             }
             Op::Release { worker, tasks } => {
@@ -203,7 +204,8 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                         forged,
                         TaskId(task),
                         Ok(Outcome::failed(Failure::Empty)),
-                        0.0
+                        0.0,
+                        now
                     )
                     .is_err()
                 );
@@ -214,7 +216,7 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                     q.quarantine(w);
                     prop_assert_eq!(q.lease(w, 4, now).err(), Some(QueueError::Quarantined(w)));
                     prop_assert_eq!(
-                        q.report(w, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0)
+                        q.report(w, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0, now)
                             .err(),
                         Some(QueueError::Quarantined(w))
                     );
@@ -235,7 +237,7 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
         for &w in &honest {
             let (leased, _) = q.lease(w, 4, now).expect("registered");
             for t in leased {
-                seen.report(&q, w, t.id, false)?;
+                seen.report(&q, w, t.id, false, now)?;
             }
         }
         q.lock().check(max_attempts).map_err(TestCaseError::fail)?;

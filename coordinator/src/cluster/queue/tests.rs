@@ -44,7 +44,10 @@ fn leases_respect_capacity_and_task_order() {
     let rx = q.submit(tasks(1..=5));
     assert_eq!(ids(&q.lease(w, 8, t0).unwrap().0), [1, 2]);
     assert!(q.lease(w, 8, t0).unwrap().0.is_empty(), "at capacity");
-    assert_eq!(q.report(w, T2, ok(), 0.1).unwrap(), Disposition::Accepted);
+    assert_eq!(
+        q.report(w, T2, ok(), 0.1, t0).unwrap(),
+        Disposition::Accepted
+    );
     assert_eq!(ids(&q.lease(w, 8, t0).unwrap().0), [3]);
     assert_eq!(rx.try_recv().unwrap().slot, 1);
     assert_eq!(q.stats().leased, 2);
@@ -64,8 +67,14 @@ fn an_expired_lease_is_redispatched_and_the_late_report_counts_once() {
     q.heartbeat(b, &[], later).unwrap();
     q.reap(later);
     assert_eq!(ids(&q.lease(b, 1, later).unwrap().0), [1]);
-    assert_eq!(q.report(a, T1, ok(), 1.0).unwrap(), Disposition::Accepted);
-    assert_eq!(q.report(b, T1, ok(), 1.0).unwrap(), Disposition::Duplicate);
+    assert_eq!(
+        q.report(a, T1, ok(), 1.0, later).unwrap(),
+        Disposition::Accepted
+    );
+    assert_eq!(
+        q.report(b, T1, ok(), 1.0, later).unwrap(),
+        Disposition::Duplicate
+    );
     assert!(rx.try_recv().is_ok());
     assert!(rx.try_recv().is_err(), "exactly one completion");
     // b still thinks it holds task 1: the heartbeat tells it otherwise.
@@ -86,7 +95,10 @@ fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
     q.heartbeat(a, &[], later).unwrap();
     q.heartbeat(b, &[], later).unwrap();
     q.reap(later);
-    assert_eq!(q.report(a, T1, ok(), 1.0).unwrap(), Disposition::Accepted);
+    assert_eq!(
+        q.report(a, T1, ok(), 1.0, later).unwrap(),
+        Disposition::Accepted
+    );
     assert!(
         q.lease(b, 1, later).unwrap().0.is_empty(),
         "done: never leased again"
@@ -110,12 +122,12 @@ fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
     let rx = q.submit(tasks(1..=1));
     q.lease(a, 1, t0).unwrap();
     assert_eq!(
-        q.report(a, T1, Err("nan".into()), 0.0).unwrap(),
+        q.report(a, T1, Err("nan".into()), 0.0, t0).unwrap(),
         Disposition::ErrorNoted
     );
     for _ in 0..2 {
         assert_eq!(
-            q.report(a, T1, Err("nan".into()), 0.0).unwrap(),
+            q.report(a, T1, Err("nan".into()), 0.0, t0).unwrap(),
             Disposition::Duplicate,
             "a worker answers a task once"
         );
@@ -126,7 +138,10 @@ fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
         "not leased again to the worker that failed it"
     );
     assert_eq!(ids(&q.lease(b, 1, t0).unwrap().0), [1]);
-    assert_eq!(q.report(b, T1, ok(), 0.0).unwrap(), Disposition::Accepted);
+    assert_eq!(
+        q.report(b, T1, ok(), 0.0, t0).unwrap(),
+        Disposition::Accepted
+    );
     assert_eq!(
         rx.try_recv().unwrap().outcome,
         Outcome::failed(Failure::Empty)
@@ -147,7 +162,7 @@ fn regression_an_error_from_a_former_holder_leaves_the_current_lease_alone() {
     q.release(a, &[T1]).unwrap();
     q.lease(b, 1, t0).unwrap();
     assert_eq!(
-        q.report(a, T1, Err("forged".into()), 0.0).unwrap(),
+        q.report(a, T1, Err("forged".into()), 0.0, t0).unwrap(),
         Disposition::ErrorNoted
     );
     assert!(
@@ -155,7 +170,10 @@ fn regression_an_error_from_a_former_holder_leaves_the_current_lease_alone() {
         "b keeps its lease"
     );
     assert_eq!(q.stats().queued, 0);
-    assert_eq!(q.report(b, T1, ok(), 0.0).unwrap(), Disposition::Accepted);
+    assert_eq!(
+        q.report(b, T1, ok(), 0.0, t0).unwrap(),
+        Disposition::Accepted
+    );
 }
 
 #[test]
@@ -194,22 +212,22 @@ fn reports_for_unknown_or_never_leased_tasks_are_refused() {
     q.submit(tasks(1..=2));
     q.lease(a, 1, t0).unwrap();
     assert_eq!(
-        q.report(a, TaskId(99), ok(), 0.0),
+        q.report(a, TaskId(99), ok(), 0.0, t0),
         Err(QueueError::UnknownTask(TaskId(99)))
     );
     assert_eq!(
-        q.report(a, TaskId(0), ok(), 0.0),
+        q.report(a, TaskId(0), ok(), 0.0, t0),
         Err(QueueError::UnknownTask(TaskId(0)))
     );
     assert_eq!(
-        q.report(b, T1, ok(), 0.0),
+        q.report(b, T1, ok(), 0.0, t0),
         Err(QueueError::NotLeasedTo {
             task: T1,
             worker: b
         })
     );
     assert_eq!(
-        q.report(a, T2, ok(), 0.0),
+        q.report(a, T2, ok(), 0.0, t0),
         Err(QueueError::NotLeasedTo {
             task: T2,
             worker: a
@@ -220,7 +238,7 @@ fn reports_for_unknown_or_never_leased_tasks_are_refused() {
         tag: a.tag,
     };
     assert_eq!(
-        q.report(forged, T1, ok(), 0.0),
+        q.report(forged, T1, ok(), 0.0, t0),
         Err(QueueError::UnknownWorker(forged))
     );
     let other_process = WorkerId {
@@ -228,11 +246,14 @@ fn reports_for_unknown_or_never_leased_tasks_are_refused() {
         ..a
     };
     assert_eq!(
-        q.report(other_process, T1, ok(), 0.0),
+        q.report(other_process, T1, ok(), 0.0, t0),
         Err(QueueError::UnknownWorker(other_process))
     );
     // Nothing above disturbed the legitimate lease.
-    assert_eq!(q.report(a, T1, ok(), 0.0).unwrap(), Disposition::Accepted);
+    assert_eq!(
+        q.report(a, T1, ok(), 0.0, t0).unwrap(),
+        Disposition::Accepted
+    );
 }
 
 #[test]
@@ -246,7 +267,7 @@ fn a_task_failing_on_three_different_workers_is_marked_failed_with_the_reasons()
     let rx = q.submit(tasks(1..=1));
     for (i, &w) in workers.iter().enumerate() {
         assert_eq!(ids(&q.lease(w, 1, t0).unwrap().0), [1]);
-        let d = q.report(w, T1, Err(format!("boom {i}")), 0.0).unwrap();
+        let d = q.report(w, T1, Err(format!("boom {i}")), 0.0, t0).unwrap();
         assert_eq!(d, Disposition::ErrorNoted);
         assert_eq!(
             rx.try_recv().is_ok(),
@@ -286,12 +307,15 @@ fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
     let b = q.register("b", 4, false, t0).unwrap();
     q.submit(tasks(1..=2));
     q.lease(a, 4, t0).unwrap();
-    q.report(a, T1, ok(), 0.0).unwrap();
-    q.report(a, T2, ok(), 0.0).unwrap();
+    q.report(a, T1, ok(), 0.0, t0).unwrap();
+    q.report(a, T2, ok(), 0.0, t0).unwrap();
     q.submit(tasks(3..=3));
-    assert_eq!(q.report(a, T2, ok(), 0.0).unwrap(), Disposition::Duplicate);
     assert_eq!(
-        q.report(b, T2, ok(), 0.0),
+        q.report(a, T2, ok(), 0.0, t0).unwrap(),
+        Disposition::Duplicate
+    );
+    assert_eq!(
+        q.report(b, T2, ok(), 0.0, t0),
         Err(QueueError::NotLeasedTo {
             task: T2,
             worker: b
@@ -350,7 +374,7 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
     let claimant = q.register("claimant", 4, false, t0).unwrap();
     let rx = q.submit(tasks(1..=1));
     q.lease(claimant, 1, t0).unwrap();
-    q.report(claimant, T1, ok(), 0.1).unwrap();
+    q.report(claimant, T1, ok(), 0.1, t0).unwrap();
     assert_eq!(rx.try_recv().unwrap().origin, Origin::Claim(claimant));
 
     let rx = q.submit_excluding(vec![(check_task(0), Some(claimant))]);
@@ -398,7 +422,7 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
         1,
         "unless a worker is quicker"
     );
-    q.report(other, orphans[0].id, ok(), 0.1).unwrap();
+    q.report(other, orphans[0].id, ok(), 0.1, later).unwrap();
     let done = rx.try_recv().unwrap();
     assert_eq!(done.origin, Origin::Trusted, "a trusted worker's outcome");
     // The coordinator's own late outcome changes nothing: the first is final.
@@ -408,6 +432,35 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
         0.0,
     );
     assert!(rx.try_recv().is_err());
+}
+
+/// A worker whose evaluation outlasted a lease (a 20³ robot takes longer than `lease_ms`) has not
+/// asked for work since it leased, yet delivering its outcome shows it at work: a check queued
+/// meanwhile is its to take, not the coordinator's.
+#[test]
+fn delivering_an_outcome_counts_as_asking_for_work() {
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let claimant = q.register("claimant", 1, false, t0).unwrap();
+    let slow = q.register("slow", 1, false, t0).unwrap();
+    let rx = q.submit(tasks(1..=2));
+    q.lease(claimant, 1, t0).unwrap();
+    q.lease(slow, 1, t0).unwrap();
+    q.report(claimant, T1, ok(), 0.1, t0).unwrap();
+    let delivered = t0 + rules().lease * 2;
+    q.report(slow, T2, ok(), 20.0, delivered).unwrap();
+    drop(rx);
+    // The batch is done; the claimant's outcome is checked in a batch of its own.
+    let _ = q.submit_excluding(vec![(check_task(0), Some(claimant))]);
+    assert!(
+        q.orphan_checks(delivered).is_empty(),
+        "the slow worker has just delivered: at work, though it last asked two leases ago"
+    );
+    assert_eq!(
+        q.orphan_checks(delivered + rules().lease).len(),
+        1,
+        "silent for a lease's length after delivering: the coordinator's"
+    );
 }
 
 /// Issue 12, item 3: a quarantined worker loses its leases to the queue and every later call of
@@ -422,7 +475,7 @@ fn a_quarantined_worker_loses_its_leases_and_is_refused() {
     assert_eq!(ids(&q.lease(liar, 2, t0).unwrap().0), [1, 2]);
     q.quarantine(liar);
     let refused = QueueError::Quarantined(liar);
-    assert_eq!(q.report(liar, T1, ok(), 0.1), Err(refused.clone()));
+    assert_eq!(q.report(liar, T1, ok(), 0.1, t0), Err(refused.clone()));
     assert_eq!(q.lease(liar, 1, t0).map(|_| ()), Err(refused.clone()));
     assert_eq!(
         q.heartbeat(liar, &[T1], t0).map(|_| ()),
@@ -434,7 +487,7 @@ fn a_quarantined_worker_loses_its_leases_and_is_refused() {
         [1, 2],
         "back in the queue"
     );
-    q.report(honest, T1, ok(), 0.1).unwrap();
+    q.report(honest, T1, ok(), 0.1, t0).unwrap();
     assert_eq!(rx.try_recv().unwrap().origin, Origin::Claim(honest));
     assert!(q.is_quarantined(liar) && !q.is_quarantined(honest));
 }
@@ -461,5 +514,29 @@ fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
     assert!(
         q.register("after", 1, false, t0 + rules().worker_timeout)
             .is_ok()
+    );
+}
+
+#[test]
+fn regression_the_server_closes_only_when_every_worker_has_heard_the_run_finished() {
+    // A worker between two calls when the run ended used to find the port closed, retry until it
+    // gave up and exit with an error: the run must stay reachable until it has been told.
+    let q = TaskQueue::new(rules());
+    let t0 = Instant::now();
+    let leaser = q.register("leaser", 1, false, t0).unwrap();
+    let beater = q.register("beater", 1, false, t0).unwrap();
+    let silent = q.register("silent", 1, false, t0).unwrap();
+    assert!(!q.everyone_told(), "the run has not finished");
+    q.finish();
+    assert!(!q.everyone_told());
+    let t1 = t0 + Duration::from_secs(1);
+    assert_eq!(q.lease(leaser, 1, t1).unwrap(), (Vec::new(), true));
+    let (revoked, finished) = q.heartbeat(beater, &[], t1).unwrap();
+    assert!(revoked.is_empty() && finished);
+    assert!(!q.everyone_told(), "{silent} has not called since");
+    q.reap(t0 + rules().worker_timeout);
+    assert!(
+        q.everyone_told(),
+        "a worker dropped for silence is not waited for"
     );
 }
