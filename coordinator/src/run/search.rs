@@ -235,11 +235,11 @@ impl Search {
             .evaluations
             .is_none_or(|max| max.saturating_sub(self.evaluations) >= population_total);
         let best = self.best().outcome.rank();
-        if !(switch_affordable && self.resolution.observe(best, schedule)) {
+        if !(switch_affordable && self.resolution.observe(best, self.evaluations, schedule)) {
             return Ok(());
         }
         let dims = schedule.dims(self.resolution.level);
-        info!(epoch = self.epoch, resolution = %dims, "progress stalled: re-evaluating at the next resolution");
+        info!(epoch = self.epoch, resolution = %dims, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
         let genomes: Vec<Vec<Genome>> = self
             .islands
             .iter()

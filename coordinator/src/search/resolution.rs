@@ -1,5 +1,7 @@
 //! Multi-resolution bootstrapping (paper §III): evaluate at a coarse resolution first and move to
-//! the next finer one when progress stalls.
+//! the next finer one when progress stalls, or at the latest after a set number of evaluations
+//! (a coarse level that keeps improving slowly would otherwise spend the budget on a design the
+//! fine grid scores far worse: docs/evolution.md, session 9).
 
 use amorph::voxel::GridDims;
 use serde::{Deserialize, Serialize};
@@ -15,6 +17,10 @@ pub struct ResolutionSchedule {
     /// Improvement that counts as progress, relative to the best fitness's magnitude.
     #[serde(default = "default_min_improvement")]
     pub min_improvement: f64,
+    /// For each level but the last, the run's evaluations by which it gives way to the next one,
+    /// stalled or not. Empty (the default): only the stall rule.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub latest_switch: Vec<u64>,
 }
 
 fn default_stall_epochs() -> usize {
@@ -30,6 +36,7 @@ impl ResolutionSchedule {
             levels: vec![[dims.nx, dims.ny, dims.nz]],
             stall_epochs: default_stall_epochs(),
             min_improvement: default_min_improvement(),
+            latest_switch: Vec::new(),
         }
     }
 
@@ -48,6 +55,21 @@ impl ResolutionSchedule {
         }
         if !(self.min_improvement.is_finite() && self.min_improvement >= 0.0) {
             return Err("resolution.min_improvement must be a non-negative number".into());
+        }
+        let l = &self.latest_switch;
+        if !l.is_empty() && l.len() + 1 != self.levels.len() {
+            return Err(format!(
+                "resolution.latest_switch lists {} evaluation counts: it needs one per level but the last ({})",
+                l.len(),
+                self.levels.len() - 1
+            ));
+        }
+        if let Some(i) = (1..l.len()).find(|&i| l[i] <= l[i - 1]) {
+            return Err(format!(
+                "resolution.latest_switch[{i}] = {} must be larger than the one before it ({})",
+                l[i],
+                l[i - 1]
+            ));
         }
         Ok(())
     }
@@ -71,9 +93,9 @@ impl ResolutionState {
         }
     }
 
-    /// Records the best fitness after an epoch; returns true when the run should move to the next
-    /// level (and then resets the stall tracking for it).
-    pub fn observe(&mut self, best: f64, schedule: &ResolutionSchedule) -> bool {
+    /// Records the best fitness after an epoch that brought the run to `evaluations`; returns true
+    /// when the run should move to the next level (and then resets the stall tracking for it).
+    pub fn observe(&mut self, best: f64, evaluations: u64, schedule: &ResolutionSchedule) -> bool {
         let threshold = self.best_at_last_progress
             + schedule.min_improvement * self.best_at_last_progress.abs();
         if best > threshold || !self.best_at_last_progress.is_finite() {
@@ -82,8 +104,12 @@ impl ResolutionState {
         } else {
             self.epochs_without_progress += 1;
         }
+        let overdue = schedule
+            .latest_switch
+            .get(self.level)
+            .is_some_and(|&latest| evaluations >= latest);
         if self.level + 1 < schedule.levels.len()
-            && self.epochs_without_progress >= schedule.stall_epochs
+            && (self.epochs_without_progress >= schedule.stall_epochs || overdue)
         {
             self.level += 1;
             self.best_at_last_progress = f64::NEG_INFINITY;
@@ -115,16 +141,59 @@ mod tests {
             levels: vec![[1, 2, 1], [2, 4, 2]],
             stall_epochs: 3,
             min_improvement: 0.1,
+            latest_switch: vec![],
         };
         let mut s = ResolutionState::new();
-        assert!(!s.observe(-10.0, &schedule));
-        assert!(!s.observe(-5.0, &schedule)); // progress
-        assert!(!s.observe(-4.8, &schedule)); // under 10 %: stall 1
-        assert!(!s.observe(-4.7, &schedule)); // stall 2
-        assert!(s.observe(-4.7, &schedule)); // stall 3: switch
+        assert!(!s.observe(-10.0, 10, &schedule));
+        assert!(!s.observe(-5.0, 20, &schedule)); // progress
+        assert!(!s.observe(-4.8, 30, &schedule)); // under 10 %: stall 1
+        assert!(!s.observe(-4.7, 40, &schedule)); // stall 2
+        assert!(s.observe(-4.7, 50, &schedule)); // stall 3: switch
         assert_eq!(s.level, 1);
         for _ in 0..10 {
-            assert!(!s.observe(-1.0, &schedule), "no level beyond the last");
+            assert!(!s.observe(-1.0, 60, &schedule), "no level beyond the last");
         }
+    }
+
+    /// A level that keeps improving never stalls; `latest_switch` moves on anyway, once per level
+    /// and at the first epoch that reaches the count, and never past the last level.
+    #[test]
+    fn a_level_that_keeps_improving_gives_way_at_its_latest_switch() {
+        let schedule = ResolutionSchedule {
+            levels: vec![[1, 2, 1], [2, 4, 2], [3, 6, 3]],
+            stall_epochs: 3,
+            min_improvement: 0.01,
+            latest_switch: vec![100, 250],
+        };
+        let mut s = ResolutionState::new();
+        let mut best = -100.0;
+        let mut switched_at = Vec::new();
+        for evaluations in (10..=400).step_by(10) {
+            best *= 0.9; // 10 % better every epoch: never a stall
+            if s.observe(best, evaluations, &schedule) {
+                switched_at.push(evaluations);
+            }
+        }
+        assert_eq!(switched_at, [100, 250]);
+        assert_eq!(s.level, 2);
+    }
+
+    #[test]
+    fn latest_switch_needs_one_increasing_count_per_coarse_level() {
+        let schedule = |latest_switch: Vec<u64>| ResolutionSchedule {
+            levels: vec![[1, 2, 1], [2, 4, 2], [3, 6, 3]],
+            stall_epochs: 3,
+            min_improvement: 0.01,
+            latest_switch,
+        };
+        assert!(schedule(vec![]).validate().is_ok());
+        assert!(schedule(vec![100, 200]).validate().is_ok());
+        let err = schedule(vec![100]).validate().unwrap_err();
+        assert!(err.starts_with("resolution.latest_switch lists 1"), "{err}");
+        let err = schedule(vec![200, 200]).validate().unwrap_err();
+        assert!(
+            err.starts_with("resolution.latest_switch[1] = 200"),
+            "{err}"
+        );
     }
 }
