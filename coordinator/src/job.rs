@@ -7,13 +7,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use amorph_worker::{EvaluationMode, WorkerOptions, run_worker};
+use amorph::task::memory;
 use tokio::sync::watch;
 use tracing::{info, warn};
 
-use crate::cluster::{
-    self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Trust, Verify,
-};
+use crate::cluster::local::LocalWorker;
+use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Verify};
 use crate::config::RunConfig;
 use crate::progress::Progress;
 use crate::run::{RunContext, RunError, run};
@@ -108,16 +107,11 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     // Listen before touching the run store, so a port in use leaves no store behind to demand
     // --resume or --fresh on the retry.
     let queue = Arc::new(TaskQueue::new(settings.rules.clone()));
-    let trust = if settings.verify != Verify::Off {
-        Trust::local()
-    } else {
-        Trust::Everyone
-    };
     let server_options = ServerOptions {
         listen: settings.listen.clone(),
         token: token.clone(),
         tls: settings.tls.clone(),
-        trust: trust.clone(),
+        trust_everyone: settings.verify == Verify::Off,
     };
     let server = runtime.block_on(cluster::start(
         &server_options,
@@ -143,33 +137,25 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
 
     let (stop_workers, stop_rx) = watch::channel(false);
     let local = settings.local_workers;
+    let scene = Arc::new(config.raw.scene.clone());
+    // The local workers share this machine: each gets its part of the default budget.
+    let budget = memory::default_budget() / local.max(1) as u64;
     let workers: Vec<_> = (0..local)
         .map(|i| {
-            let mut opts = WorkerOptions::new(url.clone(), settings.local_worker_threads);
-            opts.name = format!("local-{i}");
-            opts.token = token.clone();
-            opts.local_key = trust.local_key().map(str::to_owned);
-            opts.mode = EvaluationMode::Physics;
-            opts.exit_when_finished = true;
-            // The coordinator waits only briefly for its own workers when it stops.
-            opts.grace = Duration::from_secs(2);
-            // The local workers share this machine: each gets its part of the default budget.
-            opts.max_memory = Some(amorph_worker::memory::default_budget() / local.max(1) as u64);
-            if let Some((cert, _)) = &settings.tls {
-                opts.ca_cert = Some(cert.clone());
-                opts.tls_domain = Some(settings.tls_domain.clone());
-            }
-            runtime.spawn(run_worker(opts, stop_rx.clone()))
+            let worker = LocalWorker::new(
+                queue.clone(),
+                scene.clone(),
+                format!("local-{i}"),
+                settings.local_worker_threads,
+                budget,
+            );
+            runtime.spawn(worker.run(stop_rx.clone()))
         })
         .collect();
     info!(%url, local_workers = local, store = %store.path().display(), "coordinator ready");
 
-    let mut evaluator = ClusterEvaluator::new(
-        queue.clone(),
-        options.shutdown.clone(),
-        Arc::new(config.raw.scene.clone()),
-    )
-    .checking_every_claim(settings.verify == Verify::All);
+    let mut evaluator = ClusterEvaluator::new(queue.clone(), options.shutdown.clone(), scene)
+        .checking_every_claim(settings.verify == Verify::All);
     let ctx = RunContext {
         store: &store,
         shutdown: &options.shutdown,

@@ -5,7 +5,7 @@
 pub mod cluster;
 pub mod config;
 pub mod evaluator;
-pub mod ids;
+pub use amorph_proto::ids;
 pub mod job;
 pub mod progress;
 pub mod results;

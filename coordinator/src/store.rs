@@ -31,6 +31,7 @@ use amorph::task::Outcome;
 use rusqlite::{Connection, OptionalExtension, params};
 
 use crate::config::RunConfig;
+use crate::ids::TaskId;
 
 const FORMAT: &str = "amorph-run-store-1";
 
@@ -78,7 +79,7 @@ impl Purpose {
 /// One evaluation as the store records it.
 #[derive(Clone, Debug)]
 pub struct EvaluationRecord<'a> {
-    pub task_id: u64,
+    pub task_id: TaskId,
     pub epoch: usize,
     pub island: u32,
     pub purpose: Purpose,
@@ -246,7 +247,7 @@ impl RunStore {
                  VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
             )?
             .execute(params![
-                r.task_id as i64,
+                r.task_id.0 as i64,
                 r.epoch as i64,
                 r.island,
                 r.purpose.as_str(),
@@ -261,7 +262,7 @@ impl RunStore {
             if r.unchecked {
                 tx.execute(
                     "INSERT OR REPLACE INTO unchecked(task_id) VALUES (?1)",
-                    [r.task_id as i64],
+                    [r.task_id.0 as i64],
                 )?;
             }
             tx.commit()
@@ -272,12 +273,12 @@ impl RunStore {
     /// a contradicted claim, and the quarantine of every worker caught disagreeing.
     pub fn record_check(
         &self,
-        task_id: u64,
+        task_id: TaskId,
         claimant: &str,
         claimed: &Outcome,
         verdict: &crate::evaluator::Verdict,
     ) -> Result<()> {
-        let finished = unix_now();
+        let (task_id, finished) = (task_id.0, unix_now());
         let claimed = serde_json::to_string(claimed).expect("outcomes serialize");
         let held = serde_json::to_string(&verdict.outcome).expect("outcomes serialize");
         self.with(|c| {
@@ -321,7 +322,8 @@ impl RunStore {
         })
     }
 
-    pub fn record_task_error(&self, task_id: u64, worker: &str, message: &str) -> Result<()> {
+    pub fn record_task_error(&self, task_id: TaskId, worker: &str, message: &str) -> Result<()> {
+        let task_id = task_id.0;
         self.with(|c| {
             c.execute(
                 "INSERT INTO task_error(task_id, worker, message) VALUES (?1, ?2, ?3)",
@@ -356,7 +358,7 @@ impl RunStore {
                             epoch.epoch as i64,
                             island as i64,
                             slot as i64,
-                            task as i64,
+                            task.0 as i64,
                             fitness
                         ])?;
                     }
@@ -375,7 +377,7 @@ impl RunStore {
                         m.to,
                         m.emigrant_slot as i64,
                         m.replaced_slot.map(|s| s as i64),
-                        m.task_id as i64
+                        m.task_id.0 as i64
                     ])?;
                 }
             }
@@ -384,7 +386,7 @@ impl RunStore {
     }
 
     /// Every stored evaluation by task id, for a resumed run's replay.
-    pub fn evaluations(&self) -> Result<HashMap<u64, StoredEvaluation>> {
+    pub fn evaluations(&self) -> Result<HashMap<TaskId, StoredEvaluation>> {
         let rows: Vec<(i64, String, String, String, bool)> = self.with(|c| {
             let mut stmt = c.prepare(
                 "SELECT task_id, genome, resolution, outcome, task_id IN (SELECT task_id FROM unchecked) FROM evaluation",
@@ -407,7 +409,7 @@ impl RunStore {
                     message: format!("evaluation of task {id}: {e}"),
                 })?;
                 Ok((
-                    id,
+                    TaskId(id),
                     StoredEvaluation {
                         genome_json,
                         resolution,
@@ -449,7 +451,7 @@ impl RunStore {
     }
 
     /// The population of every island after `epoch`, as task ids in slot order.
-    pub fn population(&self, epoch: usize) -> Result<Vec<Vec<u64>>> {
+    pub fn population(&self, epoch: usize) -> Result<Vec<Vec<TaskId>>> {
         let rows: Vec<(i64, i64, i64)> = self.with(|c| {
             let mut stmt = c.prepare(
                 "SELECT island, slot, task_id FROM population WHERE epoch = ?1 ORDER BY island, slot",
@@ -459,7 +461,7 @@ impl RunStore {
                 .collect::<rusqlite::Result<Vec<_>>>()?;
             Ok(rows)
         })?;
-        let mut islands: Vec<Vec<u64>> = Vec::new();
+        let mut islands: Vec<Vec<TaskId>> = Vec::new();
         for (island, slot, task) in rows {
             // A store is a file anyone may have edited: a row that cannot be a population entry
             // is an error naming it, never an index out of range or a huge allocation.
@@ -477,7 +479,7 @@ impl RunStore {
             if i == islands.len() {
                 islands.push(Vec::new());
             }
-            islands[i].push(task);
+            islands[i].push(TaskId(task));
         }
         Ok(islands)
     }
@@ -513,7 +515,7 @@ pub struct EpochRecord<'a> {
     pub resolution: String,
     pub best_fitness: Option<f64>,
     /// Per island, per slot: (task id of the individual's evaluation, its fitness).
-    pub populations: Vec<Vec<(u64, Option<f64>)>>,
+    pub populations: Vec<Vec<(TaskId, Option<f64>)>>,
     pub migrations: &'a [MigrationRecord],
 }
 
@@ -523,7 +525,7 @@ pub struct MigrationRecord {
     pub to: u32,
     pub emigrant_slot: usize,
     pub replaced_slot: Option<usize>,
-    pub task_id: u64,
+    pub task_id: TaskId,
 }
 
 const SCHEMA: &str = "
@@ -691,7 +693,7 @@ mod tests {
                 .unwrap();
         };
         insert(0, 1);
-        assert_eq!(store.population(0).unwrap(), [[1]]);
+        assert_eq!(store.population(0).unwrap(), [[TaskId(1)]]);
         for (island, task) in [(-1, 2), (1 << 40, 3), (1, -4)] {
             insert(island, task);
             let err = store.population(0).unwrap_err().to_string();

@@ -3,6 +3,8 @@
 
 pub mod convert;
 pub mod grid;
+pub mod ids;
+pub mod signal;
 
 #[allow(missing_debug_implementations, clippy::all)]
 pub mod v1 {
@@ -20,6 +22,3 @@ pub const MAX_MESSAGE_BYTES: usize = 16 << 20;
 
 /// gRPC metadata key carrying the shared-secret token (`authorization: Bearer <token>`).
 pub const AUTHORIZATION: &str = "authorization";
-/// Metadata key with which a coordinator's own in-process workers show the secret it gave them,
-/// so their outcomes are taken without a check.
-pub const LOCAL_KEY: &str = "x-amorph-local-key";

@@ -119,7 +119,7 @@ fn regression_a_worker_between_two_calls_hears_that_the_run_finished() {
 }
 
 #[test]
-fn embedded_local_workers_run_the_real_path() {
+fn embedded_local_workers_follow_the_queue_rules_bit_for_bit() {
     let expected = reference();
     let config = small_beam_config(&scratch_dir("cluster-local"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 2, None);

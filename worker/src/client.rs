@@ -16,6 +16,7 @@ use std::time::Duration;
 
 use amorph::task::Outcome;
 use amorph::task::Scene;
+use amorph_proto::ids::TaskId;
 use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
 use amorph_proto::v1::{self, task_result};
 use amorph_proto::{MAX_MESSAGE_BYTES, PROTOCOL_VERSION, convert};
@@ -40,9 +41,6 @@ pub struct WorkerOptions {
     pub name: String,
     /// The shared secret, if the coordinator requires one.
     pub token: Option<String>,
-    /// The secret a coordinator gives its own in-process workers, so it takes their outcomes
-    /// without a check.
-    pub local_key: Option<String>,
     /// PEM certificate of the authority that signed the coordinator's certificate (TLS).
     pub ca_cert: Option<PathBuf>,
     /// Name to check the coordinator's certificate against, if not the URL's host.
@@ -71,7 +69,6 @@ impl WorkerOptions {
             threads: threads.max(1),
             name: default_name(),
             token: None,
-            local_key: None,
             ca_cert: None,
             tls_domain: None,
             mode: EvaluationMode::Physics,
@@ -118,11 +115,10 @@ pub struct WorkerSummary {
     pub sessions: u64,
 }
 
-/// Metadata every call carries: the token and, for a coordinator's own workers, its local key.
+/// Metadata every call carries: the token.
 #[derive(Clone, Debug)]
 struct Auth {
     token: Option<MetadataValue<Ascii>>,
-    local_key: Option<MetadataValue<Ascii>>,
 }
 
 impl Interceptor for Auth {
@@ -131,11 +127,6 @@ impl Interceptor for Auth {
             request
                 .metadata_mut()
                 .insert(amorph_proto::AUTHORIZATION, token.clone());
-        }
-        if let Some(key) = &self.local_key {
-            request
-                .metadata_mut()
-                .insert(amorph_proto::LOCAL_KEY, key.clone());
         }
         Ok(request)
     }
@@ -149,7 +140,7 @@ type LeaseCall =
 #[derive(Debug)]
 struct Finished {
     lease_id: String,
-    task_id: u64,
+    task_id: TaskId,
     result: Result<Outcome, String>,
     wall_seconds: f64,
 }
@@ -164,7 +155,7 @@ struct Worker {
     evaluation_budget: u64,
     done: mpsc::UnboundedReceiver<JobDone>,
     /// Tasks on the pool, with the worker id they were leased under.
-    active: HashMap<u64, String>,
+    active: HashMap<TaskId, String>,
     unreported: Vec<Finished>,
     scenes: HashMap<String, Arc<Scene>>,
     stopping: bool,
@@ -207,14 +198,6 @@ pub async fn run_worker(
                     .map_err(|_| ClientError::Setup("the token must be printable ASCII".into()))
             })
             .transpose()?,
-        local_key: opts
-            .local_key
-            .as_deref()
-            .map(|k| {
-                k.parse()
-                    .map_err(|_| ClientError::Setup("the local key must be printable ASCII".into()))
-            })
-            .transpose()?,
     };
     if opts.threads > MAX_THREADS {
         return Err(ClientError::Setup(format!(
@@ -229,7 +212,7 @@ pub async fn run_worker(
     let mut worker = Worker {
         evaluation_budget: opts
             .max_memory
-            .unwrap_or_else(crate::memory::default_budget)
+            .unwrap_or_else(amorph::task::memory::default_budget)
             / opts.threads as u64,
         pool,
         opts,
@@ -445,7 +428,7 @@ impl Worker {
                     let reply = client
                         .heartbeat(v1::HeartbeatRequest {
                             worker_id: id.clone(),
-                            active_task_ids: self.leased_under(&id),
+                            active_task_ids: wire_ids(&self.leased_under(&id)),
                             protocol_version: PROTOCOL_VERSION,
                         })
                         .await
@@ -462,7 +445,7 @@ impl Worker {
                     let released = client
                         .release(v1::ReleaseRequest {
                             worker_id: id.clone(),
-                            task_ids: ours.clone(),
+                            task_ids: wire_ids(&ours),
                         })
                         .await
                         .map(|r| r.into_inner().released)
@@ -481,8 +464,8 @@ impl Worker {
         }
     }
 
-    fn leased_under(&self, id: &str) -> Vec<u64> {
-        let mut ids: Vec<u64> = self
+    fn leased_under(&self, id: &str) -> Vec<TaskId> {
+        let mut ids: Vec<TaskId> = self
             .active
             .iter()
             .filter(|(_, lease)| lease.as_str() == id)
@@ -513,7 +496,7 @@ impl Worker {
         id: &str,
         task: v1::Task,
     ) -> Result<(), SessionError> {
-        let task_id = task.task_id;
+        let task_id = TaskId(task.task_id);
         let scene = self.scene(client, id, &task.scene_id).await?;
         let converted = task
             .genome
@@ -527,7 +510,7 @@ impl Worker {
             })
             .and_then(|(genome, dims)| scene.map(|scene| (genome, dims, scene)))
             .and_then(|(genome, dims, scene)| {
-                crate::memory::check(&scene, dims, self.evaluation_budget)
+                amorph::task::memory::check(&scene, dims, self.evaluation_budget)
                     .map(|()| (genome, dims, scene))
             });
         match converted {
@@ -541,7 +524,7 @@ impl Worker {
                 });
             }
             Err(error) => {
-                warn!(task = task_id, %error, "cannot evaluate a leased task");
+                warn!(task = %task_id, %error, "cannot evaluate a leased task");
                 self.unreported.push(Finished {
                     lease_id: id.to_owned(),
                     task_id,
@@ -614,7 +597,7 @@ impl Worker {
             let results = batch
                 .iter()
                 .map(|f| v1::TaskResult {
-                    task_id: f.task_id,
+                    task_id: f.task_id.0,
                     result: Some(match &f.result {
                         Ok(outcome) => {
                             task_result::Result::Outcome(convert::outcome_to_wire(outcome))
@@ -654,4 +637,9 @@ impl Worker {
         }
         Ok(())
     }
+}
+
+/// Task ids as the wire carries them.
+fn wire_ids(ids: &[TaskId]) -> Vec<u64> {
+    ids.iter().map(|id| id.0).collect()
 }

@@ -3,29 +3,10 @@
 //! and `worker export` do the same evaluation offline for a saved genome.
 
 pub mod client;
-pub mod memory;
 pub mod pool;
 
 pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
 pub use pool::EvaluationMode;
-
-/// Resolves at the first Ctrl-C or SIGTERM (how a terminal, docker, Kubernetes and Slurm all ask a
-/// process to stop).
-pub async fn termination() {
-    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
-    let terminated = async {
-        match term.as_mut() {
-            Some(t) => {
-                t.recv().await;
-            }
-            None => std::future::pending().await,
-        }
-    };
-    tokio::select! {
-        _ = tokio::signal::ctrl_c() => {}
-        _ = terminated => {}
-    }
-}
 
 use std::path::Path;
 

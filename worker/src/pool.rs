@@ -10,6 +10,7 @@ use amorph::outcome::Failure;
 use amorph::task::Outcome;
 use amorph::task::Scene;
 use amorph::voxel::GridDims;
+use amorph_proto::ids::TaskId;
 use tokio::sync::mpsc::UnboundedSender;
 
 /// What the pool computes for a task.
@@ -25,7 +26,7 @@ pub enum EvaluationMode {
 /// One task for the pool.
 #[derive(Debug)]
 pub struct Job {
-    pub task_id: u64,
+    pub task_id: TaskId,
     pub genome: Genome,
     pub scene: Arc<Scene>,
     pub dims: GridDims,
@@ -34,7 +35,7 @@ pub struct Job {
 /// A finished job: the outcome and the evaluation's wall time, s.
 #[derive(Debug)]
 pub struct JobDone {
-    pub task_id: u64,
+    pub task_id: TaskId,
     pub outcome: Outcome,
     pub wall_seconds: f64,
 }

@@ -132,7 +132,7 @@ fn stop_on_signal(shutdown: Arc<AtomicBool>) {
         else {
             return;
         };
-        rt.block_on(amorph_worker::termination());
+        rt.block_on(amorph_proto::signal::termination());
         eprintln!("coordinator: stopping (the run store keeps every finished evaluation)");
         shutdown.store(true, Ordering::Relaxed);
     });

@@ -3,6 +3,7 @@
 
 pub mod connections;
 pub mod evaluator;
+pub mod local;
 pub mod peer_text;
 pub mod queue;
 pub mod server;
@@ -12,5 +13,5 @@ pub mod status;
 
 pub use evaluator::ClusterEvaluator;
 pub use queue::{QueueRules, QueueStats, TaskQueue};
-pub use server::{ServerHandle, ServerOptions, Trust, start};
+pub use server::{ServerHandle, ServerOptions, start};
 pub use settings::{ClusterSection, ClusterSettings, Verify};

@@ -37,46 +37,9 @@ pub struct ServerOptions {
     pub token: Option<String>,
     /// PEM certificate chain and private key: serve TLS instead of plain HTTP/2.
     pub tls: Option<(PathBuf, PathBuf)>,
-    /// Which registering workers are trusted (their outcomes taken without a check).
-    pub trust: Trust,
-}
-
-/// Which workers' outcomes count without a second evaluation.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub enum Trust {
-    /// Every worker (`cluster.verify = false`).
-    #[default]
-    Everyone,
-    /// Only workers that show this secret as `x-amorph-local-key`: the coordinator's own
-    /// in-process workers, which it gives the secret to and nobody else ever sees.
-    LocalKey(String),
-}
-
-impl Trust {
-    /// A fresh secret for this process's local workers.
-    pub fn local() -> Self {
-        use rand::RngExt;
-        let mut rng: rand_chacha::ChaCha8Rng = rand::make_rng();
-        Self::LocalKey(format!("{:032x}", rng.random::<u128>()))
-    }
-
-    /// Whether a worker registering with `metadata` is trusted.
-    pub fn trusts(&self, metadata: &tonic::metadata::MetadataMap) -> bool {
-        match self {
-            Self::Everyone => true,
-            Self::LocalKey(key) => metadata
-                .get(amorph_proto::LOCAL_KEY)
-                .is_some_and(|v| constant_time_eq(v.as_bytes(), key.as_bytes())),
-        }
-    }
-
-    /// The secret local workers present, if any.
-    pub fn local_key(&self) -> Option<&str> {
-        match self {
-            Self::Everyone => None,
-            Self::LocalKey(key) => Some(key),
-        }
-    }
+    /// Take every worker's outcomes without a check (`cluster.verify = false`). The coordinator's
+    /// own local workers never come through here: they are trusted by construction.
+    pub trust_everyone: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -189,7 +152,7 @@ pub async fn start(
     let service = EvaluationCoordinatorServer::new(CoordinatorService::new(
         queue.clone(),
         scene,
-        options.trust.clone(),
+        options.trust_everyone,
     ))
     .max_decoding_message_size(MAX_MESSAGE_BYTES)
     .max_encoding_message_size(MAX_MESSAGE_BYTES);

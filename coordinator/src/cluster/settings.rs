@@ -34,8 +34,6 @@ pub struct ClusterSection {
     /// PEM certificate chain and private key: serve TLS (workers connect with https://).
     pub tls_cert: Option<PathBuf>,
     pub tls_key: Option<PathBuf>,
-    /// Name in the certificate that local workers check (default "localhost").
-    pub tls_domain: Option<String>,
     /// How often workers heartbeat, ms.
     pub heartbeat_ms: u64,
     /// How long a lease lasts without a heartbeat naming its task, ms.
@@ -105,7 +103,6 @@ impl Default for ClusterSection {
             token_file: None,
             tls_cert: None,
             tls_key: None,
-            tls_domain: None,
             heartbeat_ms: 1000,
             lease_ms: 10_000,
             worker_timeout_ms: 5000,
@@ -148,7 +145,6 @@ pub struct ClusterSettings {
     pub local_worker_threads: usize,
     /// PEM certificate chain and private key.
     pub tls: Option<(PathBuf, PathBuf)>,
-    pub tls_domain: String,
     pub rules: QueueRules,
     pub verify: Verify,
 }
@@ -228,7 +224,6 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
             local_workers,
             local_worker_threads,
             tls,
-            tls_domain: c.tls_domain.clone().unwrap_or_else(|| "localhost".into()),
             rules: QueueRules {
                 lease,
                 heartbeat_interval,
@@ -256,7 +251,6 @@ mod tests {
         let s = settings(|_| {}).unwrap();
         assert_eq!(s.rules.lease, Duration::from_secs(10));
         assert_eq!(s.rules.worker_timeout, Duration::from_secs(5));
-        assert_eq!(s.tls_domain, "localhost");
         assert!(s.local_workers >= 1);
     }
 

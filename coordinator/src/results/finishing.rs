@@ -101,7 +101,7 @@ impl FinerCheck {
             note: None,
         };
         let fits = scene.check_dims(finer).and_then(|()| {
-            amorph_worker::memory::check(scene, finer, amorph_worker::memory::default_budget())
+            amorph::task::memory::check(scene, finer, amorph::task::memory::default_budget())
                 .map_err(|e| e.to_string())
         });
         if let Err(e) = fits {

@@ -50,7 +50,7 @@ pub(super) fn evaluate_all(
     let mut fresh = Vec::new();
     let mut fresh_slots = Vec::new();
     for (slot, task) in tasks.iter().enumerate() {
-        let stored = search.replay.remove(&task.id.0).filter(|s| {
+        let stored = search.replay.remove(&task.id).filter(|s| {
             s.resolution == resolution
                 && serde_json::to_string(&task.genome).is_ok_and(|g| g == s.genome_json)
         });
@@ -75,7 +75,7 @@ pub(super) fn evaluate_all(
         let on_done = |task: &Task, done: &Completion| {
             ctx.progress.evaluated();
             let record = EvaluationRecord {
-                task_id: task.id.0,
+                task_id: task.id,
                 epoch,
                 island: islands[fresh_slots[done.slot]],
                 purpose,
@@ -106,7 +106,7 @@ pub(super) fn evaluate_all(
             });
         }
         for (task, worker, message) in evaluator.take_worker_errors() {
-            ctx.store.record_task_error(task.0, &worker, &message)?;
+            ctx.store.record_task_error(task, &worker, &message)?;
         }
     }
     search.evaluations += tasks.len() as u64;
@@ -138,7 +138,7 @@ pub(super) fn settle(
         decisive,
         &mut |claim, verdict| {
             ctx.store.record_check(
-                claim.task.id.0,
+                claim.task.id,
                 &claim.claimant.to_string(),
                 &claim.outcome,
                 verdict,

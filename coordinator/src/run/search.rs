@@ -18,7 +18,7 @@ use super::batch::{evaluate_all, settle};
 use super::{Result, RunContext, RunError};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
-use crate::ids::IslandId;
+use crate::ids::{IslandId, TaskId};
 use crate::search::{Breeding, Individual, Island, ResolutionState, migrate};
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
@@ -32,7 +32,7 @@ pub(super) struct Search {
     pub(super) evaluations: u64,
     pub(super) next_task: u64,
     /// Outcomes of an earlier, interrupted session of this run, by task id (see [`crate::store`]).
-    pub(super) replay: HashMap<u64, StoredEvaluation>,
+    pub(super) replay: HashMap<TaskId, StoredEvaluation>,
     /// The last epoch that session recorded: up to it the replay must match the store exactly.
     pub(super) replay_until: Option<usize>,
     pub(super) clock: RunClock,
@@ -211,7 +211,7 @@ impl Search {
                     to: event.to.0,
                     emigrant_slot: event.emigrant,
                     replaced_slot: event.replaced,
-                    task_id: event.task.0,
+                    task_id: event.task,
                 });
             }
         }
@@ -301,19 +301,19 @@ pub(super) fn record_epoch(
     dims: GridDims,
     store: &RunStore,
 ) -> Result<()> {
-    let populations: Vec<Vec<(u64, Option<f64>)>> = search
+    let populations: Vec<Vec<(TaskId, Option<f64>)>> = search
         .islands
         .iter()
         .map(|i| {
             i.population
                 .iter()
-                .map(|ind| (ind.task.0, ind.outcome.fitness()))
+                .map(|ind| (ind.task, ind.outcome.fitness()))
                 .collect()
         })
         .collect();
     if search.replay_until.is_some_and(|last| search.epoch <= last) {
         let stored = store.population(search.epoch)?;
-        let replayed: Vec<Vec<u64>> = populations
+        let replayed: Vec<Vec<TaskId>> = populations
             .iter()
             .map(|p| p.iter().map(|&(t, _)| t).collect())
             .collect();

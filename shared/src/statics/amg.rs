@@ -10,7 +10,7 @@
 //! hierarchy is built in double precision; the V-cycle runs on single-precision copies of its
 //! matrices and vectors (`single.rs`: it is memory-bound, and a preconditioner need not be exact).
 
-use super::bsr::{BlockMatrix, block_gemm_add, block_mul_add};
+use super::bsr::{BlockMatrix, RowByRow, block_gemm_add, block_mul_add};
 use super::direct::DirectFactor;
 use super::element::Block;
 use super::error::Result;
@@ -173,10 +173,7 @@ fn smoothed_prolongator(
     aggregate_of: &[u32],
     omega: f64,
 ) -> BlockMatrix {
-    let mut row_ptr = Vec::with_capacity(a.n + 1);
-    let mut cols = Vec::with_capacity(4 * a.n);
-    let mut blocks = Vec::with_capacity(4 * a.n);
-    row_ptr.push(0);
+    let mut p_rows = RowByRow::with_capacity(a.n, 4 * a.n);
     let mut row: Vec<(u32, Block)> = Vec::with_capacity(8);
     for i in 0..a.n {
         row.clear();
@@ -206,18 +203,9 @@ fn smoothed_prolongator(
             }
         }
         row.sort_unstable_by_key(|&(c, _)| c);
-        for &(c, b) in &row {
-            cols.push(c);
-            blocks.push(b);
-        }
-        row_ptr.push(cols.len());
+        p_rows.push_row(row.iter().map(|(c, b)| (*c, b)));
     }
-    BlockMatrix {
-        n: a.n,
-        row_ptr,
-        cols,
-        blocks,
-    }
+    p_rows.finish()
 }
 
 impl Multigrid {

@@ -47,6 +47,50 @@ pub(crate) fn block_gemm_add(a: &Block, b: &Block, c: &mut Block) {
     }
 }
 
+/// Builds a block matrix one row at a time, each row's blocks given in column order: the Galerkin
+/// products and the smoothed prolongator both produce their rows that way.
+#[derive(Debug)]
+pub(crate) struct RowByRow {
+    row_ptr: Vec<usize>,
+    cols: Vec<u32>,
+    blocks: Vec<Block>,
+}
+
+impl RowByRow {
+    pub(crate) fn with_capacity(rows: usize, blocks: usize) -> Self {
+        let mut row_ptr = Vec::with_capacity(rows + 1);
+        row_ptr.push(0);
+        Self {
+            row_ptr,
+            cols: Vec::with_capacity(blocks),
+            blocks: Vec::with_capacity(blocks),
+        }
+    }
+
+    /// Appends the next row; `row` must be sorted by column.
+    pub(crate) fn push_row<'a>(&mut self, row: impl Iterator<Item = (u32, &'a Block)>) {
+        let start = self.cols.len();
+        for (c, b) in row {
+            self.cols.push(c);
+            self.blocks.push(*b);
+        }
+        debug_assert!(
+            self.cols[start..].windows(2).all(|w| w[0] < w[1]),
+            "columns ascend"
+        );
+        self.row_ptr.push(self.cols.len());
+    }
+
+    pub(crate) fn finish(self) -> BlockMatrix {
+        BlockMatrix {
+            n: self.row_ptr.len() - 1,
+            row_ptr: self.row_ptr,
+            cols: self.cols,
+            blocks: self.blocks,
+        }
+    }
+}
+
 impl BlockMatrix {
     /// Number of scalar rows.
     pub fn dof(&self) -> usize {

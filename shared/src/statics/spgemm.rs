@@ -1,6 +1,6 @@
 //! Products of block sparse matrices for the Galerkin coarse operators.
 
-use super::bsr::{BlockMatrix, block_gemm_add};
+use super::bsr::{BlockMatrix, RowByRow, block_gemm_add};
 
 /// C = A B for block matrices, A with `a.n` rows and B with `ncols` block columns. Each row of C
 /// is accumulated in a scratch row indexed through a dense marker over C's columns, then copied
@@ -8,13 +8,10 @@ use super::bsr::{BlockMatrix, block_gemm_add};
 /// is copied once, not pushed and then moved twice by the sort).
 pub(crate) fn multiply(a: &BlockMatrix, b: &BlockMatrix, ncols: usize) -> BlockMatrix {
     let mut marker = vec![usize::MAX; ncols];
-    let mut row_ptr = Vec::with_capacity(a.n + 1);
-    let mut cols: Vec<u32> = Vec::new();
-    let mut blocks: Vec<[f64; 36]> = Vec::new();
+    let mut c_rows = RowByRow::with_capacity(a.n, 0);
     let mut row_cols: Vec<u32> = Vec::new();
     let mut row_blocks: Vec<[f64; 36]> = Vec::new();
     let mut order: Vec<(u32, usize)> = Vec::new();
-    row_ptr.push(0);
     for r in 0..a.n {
         row_cols.clear();
         row_blocks.clear();
@@ -34,17 +31,10 @@ pub(crate) fn multiply(a: &BlockMatrix, b: &BlockMatrix, ncols: usize) -> BlockM
         order.clear();
         order.extend(row_cols.iter().enumerate().map(|(k, &c)| (c, k)));
         order.sort_unstable_by_key(|&(c, _)| c);
-        for &(c, k) in &order {
-            cols.push(c);
-            blocks.push(row_blocks[k]);
+        c_rows.push_row(order.iter().map(|&(c, k)| (c, &row_blocks[k])));
+        for &c in &row_cols {
             marker[c as usize] = usize::MAX;
         }
-        row_ptr.push(cols.len());
     }
-    BlockMatrix {
-        n: a.n,
-        row_ptr,
-        cols,
-        blocks,
-    }
+    c_rows.finish()
 }

@@ -12,6 +12,7 @@ pub mod beam;
 pub mod cantilever;
 mod error;
 pub mod locomotion;
+pub mod memory;
 pub mod stiffness;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};

@@ -140,7 +140,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     match command {
         Command::Evaluate { design } => {
             let (genome, scene, dims) = design.load()?;
-            amorph_worker::memory::check(&scene, dims, amorph_worker::memory::default_budget())
+            amorph::task::memory::check(&scene, dims, amorph::task::memory::default_budget())
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
             let outcome = scene.evaluate(&genome, dims);
             print(&serde_json::to_string_pretty(&outcome).context("serialising the outcome")?)?;
@@ -252,7 +252,7 @@ fn serve(c: Connect) -> anyhow::Result<()> {
     opts.max_memory = c
         .max_memory
         .as_deref()
-        .map(amorph_worker::memory::parse_size)
+        .map(amorph::task::memory::parse_size)
         .transpose()
         .map_err(|e| anyhow::anyhow!("--max-memory {e}"))?;
     let runtime = tokio::runtime::Builder::new_current_thread()
@@ -262,7 +262,7 @@ fn serve(c: Connect) -> anyhow::Result<()> {
     let summary = runtime.block_on(async move {
         let (stop, stop_rx) = tokio::sync::watch::channel(false);
         tokio::spawn(async move {
-            amorph_worker::termination().await;
+            amorph_proto::signal::termination().await;
             eprintln!(
                 "worker: stopping (finishing running evaluations, then handing back the rest)"
             );

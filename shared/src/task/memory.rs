@@ -1,11 +1,11 @@
-//! An evaluation's memory, estimated from its size before it starts, against this worker's
-//! budget (`--max-memory`, by default half the machine's memory, shared by its threads). A task
-//! over budget is refused with a message the coordinator records, and goes to another worker;
-//! the worker never starts an allocation it cannot finish (Rust aborts on allocation failure,
-//! and nothing can catch that).
+//! An evaluation's memory, estimated from its size before it starts, against a worker's budget
+//! (`worker --max-memory`, by default half the machine's memory, shared by its threads; the
+//! coordinator's local workers split that default between them). A task over budget is refused
+//! with a message the coordinator records, and goes to another worker; no worker starts an
+//! allocation it cannot finish (Rust aborts on allocation failure, and nothing can catch that).
 
-use amorph::task::Scene;
-use amorph::voxel::GridDims;
+use crate::task::Scene;
+use crate::voxel::GridDims;
 
 /// Memory an evaluation needs whatever its size (scene, genome, buffers).
 const BASE_BYTES: u64 = 16 << 20;
@@ -74,7 +74,7 @@ pub fn check(scene: &Scene, dims: GridDims, budget: u64) -> Result<(), String> {
     }
     let gib = |b: u64| b as f64 / f64::from(1u32 << 30);
     Err(format!(
-        "a {}x{}x{} evaluation needs about {:.2} GiB, over this worker's budget of {:.2} GiB per evaluation (--max-memory divided by --threads)",
+        "a {}x{}x{} evaluation needs about {:.2} GiB, over this worker's budget of {:.2} GiB per evaluation (its memory budget divided by its threads)",
         dims.nx,
         dims.ny,
         dims.nz,

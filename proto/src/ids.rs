@@ -1,4 +1,5 @@
-//! Newtype identifiers, so an island index cannot be passed where a task id is expected.
+//! Typed identifiers, so an island index cannot be passed where a task id is expected. Task and
+//! worker ids cross the wire as integers and text; both ends convert them here, at the edge.
 
 use serde::{Deserialize, Serialize};
 

@@ -100,6 +100,7 @@ fn capacity() {
             .block_on(cluster::start(
                 &ServerOptions {
                     listen: "127.0.0.1:0".into(),
+                    trust_everyone: true,
                     ..Default::default()
                 },
                 queue.clone(),

@@ -1,0 +1,327 @@
+//! The coordinator's own workers (`cluster.local_workers`): evaluators inside its process that take
+//! work from the same task queue as `worker --connect` processes, under the same leases,
+//! heartbeats and reaping, so a run on local workers alone follows the rules a cluster does. They
+//! skip the wire (nothing to convert, nothing to authenticate, no loopback TLS) and their outcomes
+//! are final without a check, being computed here.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::time::Instant;
+
+use amorph::task::memory;
+use amorph::task::{Outcome, Scene};
+use tokio::sync::watch;
+use tokio::task::JoinSet;
+use tracing::{debug, info, warn};
+
+use super::queue::{QueueError, TaskQueue};
+use crate::evaluator::Task;
+use crate::ids::{TaskId, WorkerId};
+
+/// What one local worker did, for the log.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LocalSummary {
+    pub evaluated: u64,
+    /// Leases handed back because the run was stopped.
+    pub released: u64,
+}
+
+/// One local worker: its registration and what it is evaluating.
+#[derive(Debug)]
+pub struct LocalWorker {
+    queue: Arc<TaskQueue>,
+    scene: Arc<Scene>,
+    name: String,
+    threads: usize,
+    /// Bytes one evaluation may take (the worker's share of the machine, split by its threads).
+    budget_per_evaluation: u64,
+}
+
+type Evaluated = (WorkerId, TaskId, Result<Outcome, String>, f64);
+
+impl LocalWorker {
+    pub fn new(
+        queue: Arc<TaskQueue>,
+        scene: Arc<Scene>,
+        name: String,
+        threads: usize,
+        budget: u64,
+    ) -> Self {
+        let threads = threads.max(1);
+        Self {
+            queue,
+            scene,
+            name,
+            threads,
+            budget_per_evaluation: budget / threads as u64,
+        }
+    }
+
+    /// Works until the run finishes (`run_finished` on a lease or heartbeat) or `stop` is set,
+    /// when it hands its leases back at once: a stopped run keeps only what was finished.
+    pub async fn run(self, mut stop: watch::Receiver<bool>) -> Result<LocalSummary, QueueError> {
+        let mut summary = LocalSummary::default();
+        let mut id = self.register()?;
+        let mut running: JoinSet<Evaluated> = JoinSet::new();
+        let mut active: BTreeSet<TaskId> = BTreeSet::new();
+        let mut heartbeat = tokio::time::interval(self.queue.rules().heartbeat_interval);
+        heartbeat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        loop {
+            if *stop.borrow() {
+                let held: Vec<TaskId> = active.iter().copied().collect();
+                summary.released += u64::from(self.queue.release(id, &held).unwrap_or(0));
+                info!(worker = %id, released = summary.released, "local worker stopped");
+                return Ok(summary);
+            }
+            // Registered before the lease, so work queued between the two still wakes us.
+            let notified = self.queue.work_notified();
+            tokio::pin!(notified);
+            notified.as_mut().enable();
+            let free = self.threads.saturating_sub(active.len());
+            if free > 0 {
+                let leased = match self.queue.lease(id, free as u32, Instant::now()) {
+                    Err(QueueError::UnknownWorker(_)) => {
+                        (id, active) = (self.rejoin(id)?, BTreeSet::new());
+                        continue;
+                    }
+                    other => other?,
+                };
+                let (tasks, finished) = leased;
+                if finished {
+                    return Ok(summary);
+                }
+                for task in tasks {
+                    self.start(id, &task, &mut running, &mut active);
+                }
+            }
+            let room = self.threads > active.len();
+            tokio::select! {
+                Some(joined) = running.join_next() => {
+                    let (lease, task, result, wall) = match joined {
+                        Ok(done) => done,
+                        // The evaluation catches its own panics; a failed join is a runtime
+                        // shutting down, and the lease expires on its own.
+                        Err(e) => { warn!(error = %e, "local evaluation lost"); continue; }
+                    };
+                    if lease != id || !active.remove(&task) {
+                        continue; // leased under an earlier registration: the queue has moved on
+                    }
+                    summary.evaluated += 1;
+                    self.report(id, task, result, wall);
+                }
+                () = &mut notified, if room => {}
+                _ = heartbeat.tick() => {
+                    let held: Vec<TaskId> = active.iter().copied().collect();
+                    match self.queue.heartbeat(id, &held, Instant::now()) {
+                        Ok((_, true)) => return Ok(summary),
+                        Ok((_, false)) => {}
+                        Err(QueueError::UnknownWorker(_)) => {
+                            (id, active) = (self.rejoin(id)?, BTreeSet::new());
+                        }
+                        Err(e) => return Err(e),
+                    }
+                }
+                changed = stop.changed() => {
+                    if changed.is_err() {
+                        // The job dropped its stop sender: nobody can stop us any more, so stop.
+                        let held: Vec<TaskId> = active.iter().copied().collect();
+                        let _ = self.queue.release(id, &held);
+                        return Ok(summary);
+                    }
+                }
+            }
+        }
+    }
+
+    fn register(&self) -> Result<WorkerId, QueueError> {
+        self.queue.register(
+            &self.name,
+            self.threads as u32,
+            true,
+            std::time::Instant::now(),
+        )
+    }
+
+    /// A report the queue refuses (a batch that moved on) loses nothing: the task was done or
+    /// re-leased elsewhere.
+    fn report(&self, id: WorkerId, task: TaskId, result: Result<Outcome, String>, wall: f64) {
+        match self.queue.report(id, task, result, wall, Instant::now()) {
+            Ok(disposition) => debug!(%task, ?disposition, "reported"),
+            Err(e) => warn!(%task, error = %e, "local outcome not taken"),
+        }
+    }
+
+    /// The reaper dropped this worker (its heartbeats were starved past `worker_timeout`): its
+    /// leases went back to the queue, so it registers again with nothing held.
+    fn rejoin(&self, old: WorkerId) -> Result<WorkerId, QueueError> {
+        warn!(worker = %old, name = %self.name, "local worker was dropped as silent: registering again");
+        self.register()
+    }
+
+    /// Puts a leased task on a blocking thread; one over the memory budget is refused at once as
+    /// this worker's error, and goes to another worker (or fails after `max_attempts`).
+    fn start(
+        &self,
+        id: WorkerId,
+        task: &Arc<Task>,
+        running: &mut JoinSet<Evaluated>,
+        active: &mut BTreeSet<TaskId>,
+    ) {
+        if let Err(error) = memory::check(&self.scene, task.dims, self.budget_per_evaluation) {
+            warn!(task = %task.id, %error, "cannot evaluate a leased task");
+            self.report(id, task.id, Err(error), 0.0);
+            return;
+        }
+        active.insert(task.id);
+        let (task, scene) = (task.clone(), self.scene.clone());
+        running.spawn_blocking(move || {
+            let started = Instant::now();
+            let outcome = scene.evaluate(&task.genome, task.dims);
+            (id, task.id, Ok(outcome), started.elapsed().as_secs_f64())
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cluster::QueueRules;
+    use crate::evaluator::Origin;
+    use amorph::genome::{GaussianPoint, Genome};
+    use amorph::material::MaterialId;
+    use amorph::voxel::GridDims;
+    use std::time::Duration;
+
+    fn beam() -> Arc<Scene> {
+        Arc::new(toml::from_str("kind = \"beam\"\ntarget = \"straight\"").unwrap())
+    }
+
+    /// A bar of hard material from the clamped wall to the tip: a beam the solver really loads
+    /// and measures.
+    fn block(density: f64) -> Genome {
+        let point = |y: f64| GaussianPoint {
+            position: [0.5, y, 0.5],
+            density,
+            falloff: 0.3,
+            material: MaterialId(1),
+        };
+        Genome::new((0..=4).map(|i| point(f64::from(i) / 4.0)).collect())
+    }
+
+    fn tasks(n: u64) -> Vec<Task> {
+        (1..=n)
+            .map(|i| Task {
+                id: TaskId(i),
+                genome: block(0.3 + i as f64 / 10.0),
+                dims: GridDims::new(4, 12, 4),
+            })
+            .collect()
+    }
+
+    fn runtime() -> tokio::runtime::Runtime {
+        tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn local_workers_evaluate_every_task_once_exactly_as_the_scene_does() {
+        let rt = runtime();
+        let queue = Arc::new(TaskQueue::new(QueueRules::default()));
+        let scene = beam();
+        let batch = tasks(6);
+        let rx = queue.submit(batch.clone());
+        let (stop, stop_rx) = watch::channel(false);
+        let workers: Vec<_> = (0..2)
+            .map(|i| {
+                let w = LocalWorker::new(queue.clone(), scene.clone(), format!("l{i}"), 2, 1 << 40);
+                rt.spawn(w.run(stop_rx.clone()))
+            })
+            .collect();
+        let mut done: Vec<_> = (0..batch.len())
+            .map(|_| {
+                rx.recv_timeout(Duration::from_secs(60))
+                    .expect("a completion")
+            })
+            .collect();
+        done.sort_by_key(|c| c.slot);
+        for (c, task) in done.iter().zip(&batch) {
+            assert!(
+                c.outcome.fitness().is_some(),
+                "a real evaluation: {:?}",
+                c.outcome
+            );
+            assert_eq!(
+                c.outcome,
+                scene.evaluate(&task.genome, task.dims),
+                "slot {}",
+                c.slot
+            );
+            assert_eq!(c.origin, Origin::Trusted, "computed in this process");
+        }
+        assert!(rx.try_recv().is_err(), "each task completes once");
+        queue.finish();
+        let evaluated: u64 = workers
+            .into_iter()
+            .map(|w| rt.block_on(w).unwrap().unwrap().evaluated)
+            .sum();
+        assert_eq!(evaluated, 6);
+        drop(stop);
+    }
+
+    #[test]
+    fn a_stopped_local_worker_hands_its_leases_back() {
+        let rt = runtime();
+        let queue = Arc::new(TaskQueue::new(QueueRules::default()));
+        // The finest grid the beam takes keeps the evaluation running (about a second) while
+        // the stop arrives, a millisecond after the lease.
+        let slow = Task {
+            id: TaskId(1),
+            genome: block(1.0),
+            dims: GridDims::new(24, 80, 24),
+        };
+        let _rx = queue.submit(vec![slow]);
+        let (stop, stop_rx) = watch::channel(false);
+        let worker = LocalWorker::new(queue.clone(), beam(), "l".into(), 1, 1 << 40);
+        let handle = rt.spawn(worker.run(stop_rx));
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while queue.stats().leased == 0 {
+            assert!(
+                Instant::now() < deadline,
+                "the worker never leased the task"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        stop.send_replace(true);
+        let summary = rt.block_on(handle).unwrap().unwrap();
+        assert_eq!(summary.released, 1);
+        assert_eq!(
+            queue.stats().queued,
+            1,
+            "back in the queue for another worker"
+        );
+    }
+
+    #[test]
+    fn a_task_over_the_memory_budget_is_refused_before_it_starts() {
+        let rt = runtime();
+        let queue = Arc::new(TaskQueue::new(QueueRules::default()));
+        let _rx = queue.submit(tasks(1));
+        let (_stop, stop_rx) = watch::channel(false);
+        // Below the 16 MiB every evaluation needs whatever its size.
+        let worker = LocalWorker::new(queue.clone(), beam(), "small".into(), 1, 1 << 20);
+        let handle = rt.spawn(worker.run(stop_rx));
+        let noted = loop {
+            let noted = queue.take_noted_errors();
+            if !noted.is_empty() {
+                break noted;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        assert!(noted[0].2.contains("budget"), "{noted:?}");
+        queue.finish();
+        assert_eq!(rt.block_on(handle).unwrap().unwrap().evaluated, 0);
+    }
+}
