@@ -32,6 +32,7 @@ use rusqlite::{Connection, OptionalExtension, params};
 
 use crate::config::RunConfig;
 use crate::ids::TaskId;
+use crate::run::schedule::EpochTimes;
 
 const FORMAT: &str = "amorph-run-store-1";
 
@@ -482,6 +483,70 @@ impl RunStore {
             islands[i].push(TaskId(task));
         }
         Ok(islands)
+    }
+
+    /// What the wall-time model needs from the store at `path` (read-only): every recorded epoch
+    /// with its batches' evaluation times, and how many distinct workers evaluated.
+    pub fn peek_epoch_times(path: &Path) -> Result<(Vec<EpochTimes>, usize)> {
+        let (epochs, evaluations, workers) = peek(path, |conn| {
+            let mut stmt = conn.prepare(
+                "SELECT epoch, evaluations, wall_seconds, best_fitness FROM epoch ORDER BY epoch",
+            )?;
+            let epochs = stmt
+                .query_map([], |r| {
+                    Ok((
+                        r.get::<_, i64>(0)?,
+                        r.get::<_, i64>(1)?,
+                        r.get::<_, f64>(2)?,
+                        r.get::<_, Option<f64>>(3)?,
+                    ))
+                })?
+                .collect::<rusqlite::Result<Vec<_>>>()?;
+            let mut stmt =
+                conn.prepare("SELECT epoch, wall_seconds FROM evaluation ORDER BY task_id")?;
+            let evaluations = stmt
+                .query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, f64>(1)?)))?
+                .collect::<rusqlite::Result<Vec<_>>>()?;
+            let workers: i64 =
+                conn.query_row("SELECT COUNT(DISTINCT worker) FROM evaluation", [], |r| {
+                    r.get(0)
+                })?;
+            Ok((epochs, evaluations, workers))
+        })?;
+        let corrupt = |message: String| StoreError::Corrupt {
+            path: path.to_owned(),
+            message,
+        };
+        // Evaluations of epoch e ran as one batch; an epoch record holds every batch since the
+        // record before it (the first holds the initial population's).
+        let mut batches: std::collections::BTreeMap<i64, Vec<f64>> = Default::default();
+        for (epoch, wall) in evaluations {
+            if !(wall.is_finite() && wall >= 0.0) {
+                return Err(corrupt(format!(
+                    "table evaluation: wall_seconds {wall} in epoch {epoch}"
+                )));
+            }
+            batches.entry(epoch).or_default().push(wall);
+        }
+        let mut times = Vec::with_capacity(epochs.len());
+        for (epoch, evaluations, wall_seconds, best_fitness) in epochs {
+            let (Ok(index), Ok(count)) = (usize::try_from(epoch), u64::try_from(evaluations))
+            else {
+                return Err(corrupt(format!(
+                    "table epoch, row epoch {epoch}: negative epoch or evaluation count"
+                )));
+            };
+            let later = batches.split_off(&(epoch + 1));
+            let mine = std::mem::replace(&mut batches, later);
+            times.push(EpochTimes {
+                epoch: index,
+                batches: mine.into_values().collect(),
+                wall_seconds,
+                evaluations: count,
+                best_fitness,
+            });
+        }
+        Ok((times, usize::try_from(workers).unwrap_or(0)))
     }
 
     /// Evaluations in the store at `path`, read without disturbing a run that is writing it (the

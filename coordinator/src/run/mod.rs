@@ -3,6 +3,7 @@
 //! it happens. What changes the search is in `search.rs`, one batch of evaluations in `batch.rs`.
 
 mod batch;
+pub mod schedule;
 mod search;
 
 use std::sync::Arc;

@@ -1,0 +1,135 @@
+//! Wall time against workers, simulated from a finished run (issue 13): the same epochs, the same
+//! evaluations with the wall time each took, handed to W workers the way the task queue hands
+//! them out, plus the coordinator's own time per epoch as measured. It is a model, not a run:
+//! what it leaves out (network latency, a worker's start-up, machines of unequal speed) is what a
+//! check against a measured run with another number of workers shows.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// One recorded epoch: its batches of evaluations (the wall time of each, in task order) and the
+/// run's wall clock and evaluation count when it ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EpochTimes {
+    pub epoch: usize,
+    /// Batches in the order they ran (a first epoch also holds the initial population's batch).
+    pub batches: Vec<Vec<f64>>,
+    pub wall_seconds: f64,
+    pub evaluations: u64,
+    pub best_fitness: Option<f64>,
+}
+
+/// Time for `workers` to evaluate a batch whose evaluations take `durations` s, handed out in
+/// order, each to the worker that becomes free first (the queue's order: the lowest task id to the
+/// first worker asking). Ties go to the lowest worker index, so the result is deterministic.
+pub fn makespan(durations: &[f64], workers: usize) -> f64 {
+    let workers = workers.max(1);
+    if workers >= durations.len() {
+        return durations.iter().copied().fold(0.0, f64::max);
+    }
+    // Free times as integer nanoseconds so the heap is ordered without NaN questions.
+    let nanos = |s: f64| (s.max(0.0) * 1e9).round() as u64;
+    let mut free: BinaryHeap<Reverse<(u64, usize)>> =
+        (0..workers).map(|w| Reverse((0, w))).collect();
+    let mut end = 0;
+    for &d in durations {
+        let Reverse((at, w)) = free.pop().expect("at least one worker");
+        let done = at + nanos(d);
+        end = end.max(done);
+        free.push(Reverse((done, w)));
+    }
+    end as f64 * 1e-9
+}
+
+/// The coordinator's time in each epoch: the measured epoch wall time less what its batches take
+/// on the `measured_workers` the run had (never below zero).
+pub fn overheads(epochs: &[EpochTimes], measured_workers: usize) -> Vec<f64> {
+    let mut before = 0.0;
+    epochs
+        .iter()
+        .map(|e| {
+            let spent = e.wall_seconds - before;
+            before = e.wall_seconds;
+            let work: f64 = e
+                .batches
+                .iter()
+                .map(|b| makespan(b, measured_workers))
+                .sum();
+            (spent - work).max(0.0)
+        })
+        .collect()
+}
+
+/// The run's wall clock at the end of each epoch had it run on `workers` workers, with the
+/// coordinator time `overhead` per epoch.
+pub fn simulated_wall(epochs: &[EpochTimes], overhead: &[f64], workers: usize) -> Vec<f64> {
+    let mut clock = 0.0;
+    epochs
+        .iter()
+        .zip(overhead)
+        .map(|(e, o)| {
+            clock += e.batches.iter().map(|b| makespan(b, workers)).sum::<f64>() + o;
+            clock
+        })
+        .collect()
+}
+
+/// The first epoch whose best fitness is at least `fitness` (a beam's fitness is −RMS), if any.
+pub fn first_reaching(epochs: &[EpochTimes], fitness: f64) -> Option<usize> {
+    epochs
+        .iter()
+        .position(|e| e.best_fitness.is_some_and(|f| f >= fitness))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_worker_takes_the_sum_and_enough_workers_the_longest() {
+        let d = [0.3, 1.0, 0.2, 0.5];
+        assert!((makespan(&d, 1) - 2.0).abs() < 1e-9);
+        assert!((makespan(&d, 4) - 1.0).abs() < 1e-9);
+        assert!((makespan(&d, 64) - 1.0).abs() < 1e-9);
+        assert_eq!(makespan(&[], 3), 0.0);
+    }
+
+    #[test]
+    fn tasks_go_to_the_first_free_worker_in_order() {
+        // Two workers: 3 on w0, 1 on w1; w1 frees at 1 and takes 1 (ends 2) and then 1 (ends 3),
+        // w0 frees at 3 and takes the last 1 (ends 4).
+        assert!((makespan(&[3.0, 1.0, 1.0, 1.0, 1.0], 2) - 4.0).abs() < 1e-9);
+        // Greedy in order is not optimal: the long task last leaves one worker idle.
+        assert!((makespan(&[1.0, 1.0, 2.0], 2) - 3.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn simulating_the_measured_worker_count_gives_back_the_measured_clock() {
+        let epochs = vec![
+            EpochTimes {
+                epoch: 1,
+                batches: vec![vec![1.0, 2.0, 3.0], vec![1.0, 1.0]],
+                wall_seconds: 9.0,
+                evaluations: 5,
+                best_fitness: Some(-0.02),
+            },
+            EpochTimes {
+                epoch: 2,
+                batches: vec![vec![2.0, 2.0]],
+                wall_seconds: 13.5,
+                evaluations: 7,
+                best_fitness: Some(-0.01),
+            },
+        ];
+        let overhead = overheads(&epochs, 1);
+        assert!((overhead[0] - 1.0).abs() < 1e-9 && (overhead[1] - 0.5).abs() < 1e-9);
+        let same = simulated_wall(&epochs, &overhead, 1);
+        assert!((same[0] - 9.0).abs() < 1e-9 && (same[1] - 13.5).abs() < 1e-9);
+        // Two workers: [1, 2, 3] takes 4 (the 3 starts when the 1 ends), [1, 1] takes 1, [2, 2]
+        // takes 2; each epoch keeps its overhead.
+        let two = simulated_wall(&epochs, &overhead, 2);
+        assert!((two[0] - 6.0).abs() < 1e-9 && (two[1] - 8.5).abs() < 1e-9);
+        assert_eq!(first_reaching(&epochs, -0.015), Some(1));
+        assert_eq!(first_reaching(&epochs, -0.001), None);
+    }
+}
