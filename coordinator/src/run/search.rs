@@ -19,7 +19,9 @@ use super::{Result, RunContext, RunError};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
-use crate::search::{Breeding, Individual, Island, ResolutionState, migrate};
+use crate::search::{
+    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, migrate,
+};
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
 use crate::verification::{self, Evaluated};
@@ -161,16 +163,49 @@ impl Search {
             .evaluations
             .map_or(u64::MAX, |max| max.saturating_sub(self.evaluations));
         let breeding = &self.breeding;
-        let children: Vec<_> = self
+        // One climb for the whole run: every island nudges the run's best, and the island that
+        // holds it (the lowest index on a tie) judges the nudges.
+        let local = &breeding.variation.local_search;
+        let shared = (local.shared && local.fraction > 0.0).then(|| {
+            let holder = (0..islands)
+                .reduce(|best, i| {
+                    let (a, b) = (self.islands[i].best(), self.islands[best].best());
+                    if a.outcome.is_fitter_than(&b.outcome) {
+                        i
+                    } else {
+                        best
+                    }
+                })
+                .expect("a run has islands");
+            let slot = self.islands[holder].best_index();
+            let genome = self.islands[holder].population[slot].genome.clone();
+            let site =
+                (local.insertion > 0.0).then(|| BoundarySite::new(&genome, &breeding.scene, dims));
+            (holder, SharedBest { genome, slot, site })
+        });
+        let mut children: Vec<Vec<Child>> = self
             .islands
             .iter_mut()
             .enumerate()
             .map(|(i, island)| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
                 let count = (raw.search.children_per_epoch as u64).min(share) as usize;
-                island.breed(count, breeding, dims)
+                island.breed(count, breeding, dims, shared.as_ref().map(|(_, s)| s))
             })
             .collect();
+        if let Some((holder, _)) = shared {
+            let mut handed = Vec::new();
+            for (i, island_children) in children.iter_mut().enumerate() {
+                if i != holder {
+                    let (nudges, crossovers) = std::mem::take(island_children)
+                        .into_iter()
+                        .partition(|c: &Child| c.nudge);
+                    *island_children = crossovers;
+                    handed.extend(nudges);
+                }
+            }
+            children[holder].extend(handed);
+        }
         let genomes: Vec<Vec<Genome>> = children
             .iter()
             .map(|c| c.iter().map(|c| c.genome.clone()).collect())

@@ -36,6 +36,15 @@ pub struct Child {
     pub nudge: bool,
 }
 
+/// The design every island's nudges start from under `local_search.shared`: the run's best, its
+/// slot in the island that holds it, and its boundary for insertions (at the current resolution).
+#[derive(Debug)]
+pub struct SharedBest {
+    pub genome: Genome,
+    pub slot: usize,
+    pub site: Option<BoundarySite>,
+}
+
 /// How an island breeds (shared by all islands of a run).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Breeding {
@@ -100,7 +109,16 @@ impl Island {
     /// plane, the dominant parent, then mutation; the last few are nudges of the best when a local
     /// search is configured (some of them point insertions on the best's design at `dims`, the
     /// run's current resolution). The mutation step first adapts to the last epoch's success.
-    pub fn breed(&mut self, count: usize, breeding: &Breeding, dims: GridDims) -> Vec<Child> {
+    /// With `shared` (the run's best: its genome, its slot in the island holding it, and its
+    /// boundary), the nudges are of that design and name its slot as their dominant parent; the
+    /// caller hands them to the island that holds it.
+    pub fn breed(
+        &mut self,
+        count: usize,
+        breeding: &Breeding,
+        dims: GridDims,
+        shared: Option<&SharedBest>,
+    ) -> Vec<Child> {
         let (replaced, tried) = self.last_success;
         self.step_scale =
             breeding
@@ -116,16 +134,30 @@ impl Island {
         let mut children: Vec<Child> = (0..count - nudges)
             .map(|_| self.crossover_child(breeding, &mutation))
             .collect();
-        let best = self.best_index();
         let local = &breeding.variation.local_search;
-        let site = (nudges > 0 && local.insertion > 0.0)
-            .then(|| BoundarySite::new(&self.population[best].genome, &breeding.scene, dims));
+        let own;
+        let from = match shared {
+            Some(shared) => shared,
+            None => {
+                let slot = self.best_index();
+                let genome = self.population[slot].genome.clone();
+                let site = (nudges > 0 && local.insertion > 0.0)
+                    .then(|| BoundarySite::new(&genome, &breeding.scene, dims));
+                own = SharedBest { genome, slot, site };
+                &own
+            }
+        };
         for _ in 0..nudges {
-            let mut genome = self.population[best].genome.clone();
-            local.step_from_best(&mut genome, &mut self.rng, site.as_ref(), &breeding.scene);
+            let mut genome = from.genome.clone();
+            local.step_from_best(
+                &mut genome,
+                &mut self.rng,
+                from.site.as_ref(),
+                &breeding.scene,
+            );
             children.push(Child {
                 genome,
-                dominant_parent: best,
+                dominant_parent: from.slot,
                 nudge: true,
             });
         }
@@ -334,10 +366,11 @@ mod tests {
                 probability: 1.0,
                 step: 0.01,
                 insertion: 0.0,
+                shared: false,
             },
             ..Default::default()
         });
-        let children = isl.breed(6, &b, DIMS);
+        let children = isl.breed(6, &b, DIMS, None);
         assert_eq!(children.iter().filter(|c| c.nudge).count(), 3);
         assert!(children[..3].iter().all(|c| !c.nudge), "nudges come last");
         for c in &children[3..] {
@@ -356,6 +389,47 @@ mod tests {
         }
     }
 
+    /// Under a shared climb the nudges are of the design handed in and name its slot (in the
+    /// island that holds it), whatever this island's own best is; crossovers stay this island's.
+    #[test]
+    fn shared_nudges_start_from_the_run_best_not_the_island_best() {
+        let mut isl = island(0, &[0.1, 0.2, 0.3], &[-1.0, -5.0, -3.0]);
+        let run_best = random_genome(isl.rng_mut(), 30, &GenomeLimits::default(), 2);
+        let b = breeding(Variation {
+            local_search: LocalSearchParams {
+                fraction: 0.5,
+                shared: true,
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        let shared = SharedBest {
+            genome: run_best.clone(),
+            slot: 7,
+            site: None,
+        };
+        let children = isl.breed(4, &b, DIMS, Some(&shared));
+        for c in &children[..2] {
+            assert!(
+                !c.nudge && c.dominant_parent < 3,
+                "crossovers of this island"
+            );
+        }
+        for c in &children[2..] {
+            assert!(c.nudge);
+            assert_eq!(c.dominant_parent, 7);
+            assert_eq!(c.genome.len(), run_best.len());
+            let moved = c
+                .genome
+                .points
+                .iter()
+                .zip(&run_best.points)
+                .filter(|(p, q)| p != q)
+                .count();
+            assert_eq!(moved, 1, "one point of the run's best moved");
+        }
+    }
+
     #[test]
     fn a_point_nudge_moves_exactly_the_chosen_points_and_nothing_else() {
         let mut isl = island(0, &[0.1, 0.2], &[-5.0, -1.0]);
@@ -370,7 +444,7 @@ mod tests {
                 },
                 ..Default::default()
             });
-            for c in isl.breed(8, &b, DIMS) {
+            for c in isl.breed(8, &b, DIMS, None) {
                 assert!(c.nudge);
                 assert_eq!(c.genome.len(), best.len());
                 let moved: Vec<_> = c
@@ -419,12 +493,12 @@ mod tests {
                 (TaskId(3), scored(-0.5)),
             ],
         );
-        isl.breed(1, &b, DIMS);
+        isl.breed(1, &b, DIMS, None);
         assert_eq!(isl.step_scale(), 1.2);
         // Then an epoch with only failures shrinks it back.
         let children = vec![child(0, 0.1)];
         isl.apply(children, vec![(TaskId(4), failed())]);
-        isl.breed(1, &b, DIMS);
+        isl.breed(1, &b, DIMS, None);
         assert_eq!(isl.step_scale(), 1.0);
     }
 }

@@ -14,7 +14,7 @@ pub use diversity::{
     DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
 };
 pub use insertion::{BoundarySite, other_state};
-pub use island::{Breeding, Child, Individual, Island};
+pub use island::{Breeding, Child, Individual, Island, SharedBest};
 pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,
     genome_distance, migrate,

@@ -32,6 +32,10 @@ pub struct LocalSearchParams {
     /// Share of the nudges that instead add one narrow point at a random voxel on the best's
     /// design boundary, giving that voxel another state (see `search::insertion`).
     pub insertion: f64,
+    /// Every island's nudges start from the run's best (in the island that holds it, which judges
+    /// them) instead of the island's own best: one climb fed by all islands rather than one short
+    /// climb per island. Crossover children stay in their islands.
+    pub shared: bool,
 }
 
 impl Default for LocalSearchParams {
@@ -42,6 +46,7 @@ impl Default for LocalSearchParams {
             probability: 0.2,
             step: 0.02,
             insertion: 0.0,
+            shared: false,
         }
     }
 }
