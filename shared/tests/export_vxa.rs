@@ -60,15 +60,40 @@ fn the_scene_settings_are_written_for_voxelyze() {
     assert_eq!(value("GravAcc"), -9.81);
     assert_eq!(value("FloorEnabled"), 1.0);
     assert_eq!(value("TempPeriod"), 0.07);
-    // ±20 % volume is a linear expansion of 1.2^(1/3) − 1 per unit of the ±1 temperature swing,
-    // on the actuated foam only.
+    // The reader's swing is TempAmp − TempBase (the newer TempAmplitude beside it): one unit.
+    assert_eq!(value("TempAmp") - value("TempBase"), 1.0);
+    assert_eq!(value("TempAmplitude"), 1.0);
+    // Its edge is s(1 + CTE sin): half the distance between our edge's extremes (1 ± 0.2)^(1/3)
+    // for ±20 % volume, on the actuated foam only; voxels may grow by the whole stroke.
+    let stroke = 0.5 * (1.2f64.cbrt() - 0.8f64.cbrt());
     let ctes: Vec<f64> = doc
         .descendants()
         .filter(|n| n.has_tag_name("CTE"))
         .map(|n| n.text().unwrap().parse().unwrap())
         .collect();
-    assert_eq!(ctes, vec![0.0, 1.2f64.cbrt() - 1.0]);
-    assert!((value("StopConditionValue") - (0.5 + 10.0 * 0.07)).abs() < 1e-12);
+    assert_eq!(ctes.len(), 2);
+    assert_eq!(ctes[0], 0.0);
+    assert!((ctes[1] - stroke).abs() < 1e-15 && (ctes[1] - 0.0672).abs() < 1e-4);
+    assert!(value("GrowthAmplitude") >= stroke);
+    // Settling (at most 0.5 s) ends on a whole period (8 × 0.07 s), then ten cycles are measured.
+    assert!((value("InitCmTime") - 0.56).abs() < 1e-12);
+    assert!((value("StopConditionValue") - (0.56 + 10.0 * 0.07)).abs() < 1e-12);
+    assert!(value("DtFrac") <= 0.9);
+    // The reader's bond ratio refers to one bond, ours to the lattice's top mode (ω² = 14 k/m).
+    let link = LocomotionScene::default()
+        .dynamics_at(GridDims::new(20, 20, 20))
+        .damping
+        .link;
+    assert!((value("BondDampingZ") - 2.0 * link / 14f64.sqrt()).abs() < 1e-15);
+    let fitness_file = doc
+        .descendants()
+        .find(|n| n.has_tag_name("FitnessFileName"))
+        .and_then(|n| n.text());
+    assert_eq!(
+        fitness_file,
+        Some("fitness.xml"),
+        "the reader writes a result only when named"
+    );
 }
 
 #[test]

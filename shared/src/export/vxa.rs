@@ -2,13 +2,18 @@
 //! materials and, for a dynamic scene, the simulation and environment settings, so an evolved robot
 //! opens in VoxCAD and runs in Voxelyze.
 //!
-//! Voxelyze actuates by thermal expansion: a material with coefficient CTE under a temperature
-//! swinging ±`TempAmp` about `TempBase` with period `TempPeriod` scales its size by 1 + CTE·ΔT. Our
-//! volumetric actuation (1 + a)³ = 1 + amplitude_volume is written as TempAmp = 1 and CTE = a.
+//! The settings are written the way the VoxCAD-era Voxelyze reader reads them (docs/exports.md,
+//! measured with that reader built from `evosoro/_voxcad`): it actuates by thermal expansion, an
+//! edge of s(1 + CTE·ΔT·sin(2πt/T)) with ΔT = `TempAmp` − `TempBase` (so both are written, 1 and
+//! 0, with the newer `TempAmplitude` = 1 beside them); it lets no voxel grow past its rest size
+//! unless `GrowthAmplitude` allows it; its only settle is `InitCmTime`, before which nothing
+//! actuates and from which travel is measured, with the sine's phase counted from t = 0; and its
+//! bond damping ratio is ours scaled by 2/√14 (its ratio refers to one bond, ours to the lattice's
+//! top mode).
 
 use std::fmt::Write;
 
-use crate::dynamics::DynamicScene;
+use crate::dynamics::{DynamicScene, TOP_EIGENVALUE};
 use crate::material::{Material, MaterialId, Palette};
 use crate::task::SimulatorSettings;
 use crate::voxel::{GridDims, VoxelGrid};
@@ -48,7 +53,7 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
     let _ = writeln!(w, r#"<?xml version="1.0" encoding="ISO-8859-1"?>"#);
     let _ = writeln!(w, r#"<VXA Version="1.1">"#);
     if let Some(settings) = settings {
-        write_simulator(w, &settings.scene, settings.stop_time);
+        write_simulator(w, settings);
         write_environment(w, &settings.scene);
     }
     let _ = writeln!(w, r#"<VXC Version="0.94">"#);
@@ -64,7 +69,7 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
     let _ = writeln!(w, "<Palette>");
     let amplitude = settings
         .and_then(|s| s.scene.actuation.as_ref())
-        .map_or(0.0, |a| (1.0 + a.amplitude_volume).cbrt() - 1.0);
+        .map_or(0.0, |a| edge_stroke(a.amplitude_volume));
     for (id, m) in design.palette.iter() {
         let cte = if m.actuated { amplitude } else { 0.0 };
         let [r, g, b] = m.colour.map(|c| f64::from(c) / 255.0);
@@ -106,13 +111,34 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
     x
 }
 
-fn write_simulator(w: &mut String, scene: &DynamicScene, stop_time: f64) {
+/// The reader's linear expansion per unit temperature that matches our volume sine's stroke: our
+/// edge swings between (1 ± a)^(1/3) for a volume amplitude a, the reader's symmetrically by
+/// ±CTE, so CTE is half the distance between the two (0.0672 for a = 0.2).
+pub fn edge_stroke(amplitude_volume: f64) -> f64 {
+    0.5 * ((1.0 + amplitude_volume).cbrt() - (1.0 - amplitude_volume).cbrt())
+}
+
+/// The reader's time-step fraction at most: at 1.0 its floor spring, which its step bound leaves
+/// out, makes a resting body drift (5.6 mm in 0.7 s measured); 0.9 is its own default.
+const READER_MAX_DT_FRACTION: f64 = 0.9;
+
+fn write_simulator(w: &mut String, settings: &SimulatorSettings) {
+    let scene = &settings.scene;
     let d = &scene.damping;
+    // Settling ends on a whole period, so the reader's sine, whose phase runs from t = 0, starts
+    // its first measured cycle at phase 0 as ours does.
+    let (settle, stop) = match &scene.actuation {
+        Some(a) => {
+            let settle = (settings.settle_time / a.period).ceil() * a.period;
+            (settle, settle + f64::from(settings.cycles) * a.period)
+        }
+        None => (settings.settle_time, settings.settle_time),
+    };
     let _ = writeln!(
         w,
-        "<Simulator><Integration><Integrator>0</Integrator><DtFrac>{}</DtFrac></Integration><Damping><BondDampingZ>{}</BondDampingZ><ColDampingZ>{}</ColDampingZ><SlowDampingZ>{}</SlowDampingZ></Damping><Collisions><SelfColEnabled>{}</SelfColEnabled><ColSystem>3</ColSystem><CollisionHorizon>3</CollisionHorizon></Collisions><Features><FluidDampEnabled>0</FluidDampEnabled><PoissonKickBackEnabled>0</PoissonKickBackEnabled><EnforceLatticeEnabled>0</EnforceLatticeEnabled></Features><StopCondition><StopConditionType>2</StopConditionType><StopConditionValue>{stop_time}</StopConditionValue></StopCondition></Simulator>",
-        scene.dt_fraction.min(1.0),
-        d.link,
+        "<Simulator><Integration><Integrator>0</Integrator><DtFrac>{}</DtFrac></Integration><Damping><BondDampingZ>{}</BondDampingZ><ColDampingZ>{}</ColDampingZ><SlowDampingZ>{}</SlowDampingZ></Damping><Collisions><SelfColEnabled>{}</SelfColEnabled><ColSystem>3</ColSystem><CollisionHorizon>3</CollisionHorizon></Collisions><Features><FluidDampEnabled>0</FluidDampEnabled><PoissonKickBackEnabled>0</PoissonKickBackEnabled><EnforceLatticeEnabled>0</EnforceLatticeEnabled></Features><StopCondition><StopConditionType>2</StopConditionType><StopConditionValue>{stop}</StopConditionValue><InitCmTime>{settle}</InitCmTime></StopCondition><GA><FitnessFileName>fitness.xml</FitnessFileName></GA></Simulator>",
+        scene.dt_fraction.min(READER_MAX_DT_FRACTION),
+        2.0 * d.link / TOP_EIGENVALUE.sqrt(),
         d.contact,
         d.global,
         u8::from(scene.collisions),
@@ -120,13 +146,13 @@ fn write_simulator(w: &mut String, scene: &DynamicScene, stop_time: f64) {
 }
 
 fn write_environment(w: &mut String, scene: &DynamicScene) {
-    let (temp_enabled, period) = match &scene.actuation {
-        Some(a) => (1, a.period),
-        None => (0, 1.0),
+    let (temp_enabled, period, growth) = match &scene.actuation {
+        Some(a) => (1, a.period, 2.0 * edge_stroke(a.amplitude_volume)),
+        None => (0, 1.0, 0.0),
     };
     let _ = writeln!(
         w,
-        "<Environment><Fixed_Regions><NumFixed>0</NumFixed></Fixed_Regions><Forced_Regions><NumForced>0</NumForced></Forced_Regions><Gravity><GravEnabled>{}</GravEnabled><GravAcc>{}</GravAcc><FloorEnabled>{}</FloorEnabled></Gravity><Thermal><TempEnabled>{temp_enabled}</TempEnabled><TempAmp>1</TempAmp><TempBase>25</TempBase><VaryTempEnabled>{temp_enabled}</VaryTempEnabled><TempPeriod>{period}</TempPeriod></Thermal></Environment>",
+        "<Environment><Fixed_Regions><NumFixed>0</NumFixed></Fixed_Regions><Forced_Regions><NumForced>0</NumForced></Forced_Regions><Gravity><GravEnabled>{}</GravEnabled><GravAcc>{}</GravAcc><FloorEnabled>{}</FloorEnabled></Gravity><Thermal><TempEnabled>{temp_enabled}</TempEnabled><TempAmp>1</TempAmp><TempBase>0</TempBase><TempAmplitude>1</TempAmplitude><VaryTempEnabled>{temp_enabled}</VaryTempEnabled><TempPeriod>{period}</TempPeriod></Thermal><GrowthAmplitude>{growth}</GrowthAmplitude></Environment>",
         u8::from(scene.gravity > 0.0),
         -scene.gravity,
         u8::from(scene.floor.is_some()),

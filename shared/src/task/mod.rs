@@ -51,8 +51,10 @@ pub struct Artefact {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulatorSettings {
     pub scene: DynamicScene,
-    /// Settling plus every actuation cycle, s.
-    pub stop_time: f64,
+    /// The longest the body may settle under gravity before actuation starts, s.
+    pub settle_time: f64,
+    /// Actuation cycles measured after settling.
+    pub cycles: u32,
 }
 
 /// A task: its scene is `Self`, its measurements `Self::Metrics`.

@@ -142,10 +142,10 @@ impl Task for LocomotionScene {
     }
 
     fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
-        let scene = self.dynamics_at(dims);
-        let cycles = f64::from(self.actuation_cycles);
-        let stop_time =
-            self.settle.max_time + scene.actuation.as_ref().map_or(0.0, |a| a.period * cycles);
-        Some(SimulatorSettings { scene, stop_time })
+        Some(SimulatorSettings {
+            scene: self.dynamics_at(dims),
+            settle_time: self.settle.max_time,
+            cycles: self.actuation_cycles,
+        })
     }
 }
