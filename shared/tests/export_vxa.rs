@@ -4,6 +4,7 @@
 use amorph::dynamics::foam_palette;
 use amorph::export::{VxaDesign, read_vxa, write_vxa};
 use amorph::material::{MaterialId, Palette};
+use amorph::task::beam::{BeamScene, NamedProfile};
 use amorph::task::{SimulatorSettings, Task, locomotion::LocomotionScene};
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
@@ -94,6 +95,84 @@ fn the_scene_settings_are_written_for_voxelyze() {
         Some("fitness.xml"),
         "the reader writes a result only when named"
     );
+}
+
+/// A beam is written as its load case for the reader to relax: clamp and load regions that catch
+/// exactly the root and tip layers under the reader's overlap rule, the whole tip load, no
+/// gravity or floor, kinetic damping and a rest test set against the least strain energy.
+#[test]
+fn a_beam_is_written_as_its_clamped_and_loaded_layers() {
+    let scene = BeamScene::new(NamedProfile::CircularArc);
+    let dims = GridDims::new(6, 20, 6);
+    let settings = scene
+        .simulator_settings(dims)
+        .expect("a beam has a load case");
+    let d = design(&[2; 6 * 20 * 6], dims, Palette::hard_soft_resins());
+    let text = write_vxa(&d, Some(&settings));
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let value = |node: roxmltree::Node<'_, '_>, name: &str| -> f64 {
+        node.descendants()
+            .find(|n| n.has_tag_name(name))
+            .unwrap_or_else(|| panic!("<{name}> missing"))
+            .text()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let root = doc.root_element();
+    assert_eq!(value(root, "GravEnabled"), 0.0);
+    assert_eq!(value(root, "FloorEnabled"), 0.0);
+    assert_eq!(value(root, "TempEnabled"), 0.0);
+    assert_eq!(value(root, "EquilibriumModeEnabled"), 1.0);
+    assert_eq!(value(root, "StopConditionType"), 5.0);
+    assert_eq!(value(root, "NumBCs"), 2.0);
+    let regions: Vec<_> = root
+        .descendants()
+        .filter(|n| n.has_tag_name("FRegion"))
+        .collect();
+    assert_eq!(regions.len(), 2);
+    // The reader's box test: a voxel (its cube, in workspace fractions) belongs to a region when
+    // the open intervals overlap on every axis.
+    let layers_caught = |r: roxmltree::Node<'_, '_>| -> Vec<usize> {
+        let (y, dy) = (value(r, "Y"), value(r, "dY"));
+        assert!(value(r, "X") <= 0.0 && value(r, "dX") >= 1.0);
+        assert!(value(r, "Z") <= 0.0 && value(r, "dZ") >= 1.0);
+        (0..dims.ny)
+            .filter(|&l| {
+                let (lo, hi) = (l as f64 / 20.0, (l + 1) as f64 / 20.0);
+                hi > y && lo < y + dy
+            })
+            .collect()
+    };
+    assert_eq!(layers_caught(regions[0]), vec![0]);
+    assert_eq!(value(regions[0], "DofFixed"), 63.0, "clamped in all six");
+    assert_eq!(layers_caught(regions[1]), vec![19]);
+    assert_eq!(value(regions[1], "DofFixed"), 0.0);
+    assert_eq!(value(regions[1], "ForceZ"), -scene.tip_load);
+    assert_eq!(
+        value(regions[1], "ForceX") + value(regions[1], "ForceY"),
+        0.0
+    );
+    // Rest: total kinetic energy below 1e-8 of the strain energy of the stiffest possible beam
+    // (the reader stops when the energy per voxel stays below a thousandth of the value).
+    let s = scene.length / 20.0;
+    let (e, i) = (1e9, (6.0 * s) * (6.0 * s).powi(3) / 12.0);
+    let least = 0.5 * scene.tip_load * scene.tip_load * scene.length.powi(3) / (3.0 * e * i);
+    let per_voxel = 1e-3 * value(root, "StopConditionValue");
+    let total = per_voxel * (6 * 20 * 6) as f64;
+    assert!(
+        (total / least - 1e-8).abs() < 1e-20,
+        "{total} against {least}"
+    );
+}
+
+#[test]
+fn a_robot_has_no_regions_and_no_kinetic_damping() {
+    let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
+    let text = write_vxa(&d, robot_settings().as_ref());
+    assert!(text.contains("<NumBCs>0</NumBCs>"));
+    assert!(text.contains("<EquilibriumModeEnabled>0</EquilibriumModeEnabled>"));
+    assert!(!text.contains("<FRegion>"));
 }
 
 #[test]

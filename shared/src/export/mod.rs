@@ -15,6 +15,7 @@ pub mod smooth;
 pub mod stl;
 pub mod threemf;
 pub mod trajectory;
+pub mod voxcraft;
 pub mod vxa;
 
 pub use animation::{AnimationError, AnimationOptions, animation_gif, write_locomotion_animation};
@@ -30,6 +31,7 @@ pub use smooth::{SampledField, isosurface, samples_per_voxel, smooth_material_me
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use threemf::{package_3mf, write_3mf};
 pub use trajectory::{trajectory_csv, trajectory_plot};
+pub use voxcraft::{write_voxcraft_base, write_vxd};
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 
 use crate::material::MaterialId;
@@ -54,7 +56,7 @@ pub fn material_meshes_mm(
 
 /// Writes every fabrication file of a design into `dir`: `material-<i>-<name>.stl` per material
 /// present, `design.3mf` (all materials), `design.vxa` (with the scene's dynamics settings for a
-/// robot) and
+/// robot), for a robot voxcraft-sim's pair `voxcraft/base.vxa` and `voxcraft/design.vxd`, and
 /// `layers/layer-<z>.svg` per voxel layer. Returns the files written, relative to `dir`.
 pub fn write_fabrication_files(
     dir: &std::path::Path,
@@ -80,16 +82,31 @@ pub fn write_fabrication_files(
         std::io::Write::flush(&mut file)?;
         written.push(name);
     }
+    let settings = scene.simulator_settings(grid.dims());
     let vxa = write_vxa(
         &VxaDesign {
             grid: grid.clone(),
             palette: palette.clone(),
             voxel_size,
         },
-        scene.simulator_settings(grid.dims()).as_ref(),
+        settings.as_ref(),
     );
     std::fs::write(dir.join("design.vxa"), vxa)?;
     written.push(PathBuf::from("design.vxa"));
+    // voxcraft-sim's pair for a robot only: the load case's relaxation has not been checked there.
+    if let Some(settings) = settings.as_ref().filter(|s| s.load_case.is_none()) {
+        std::fs::create_dir_all(dir.join("voxcraft"))?;
+        for (name, text) in [
+            (
+                "voxcraft/base.vxa",
+                write_voxcraft_base(palette, voxel_size, settings),
+            ),
+            ("voxcraft/design.vxd", write_vxd(grid)),
+        ] {
+            std::fs::write(dir.join(name), text)?;
+            written.push(PathBuf::from(name));
+        }
+    }
     let package = package_3mf(&meshes, palette).map_err(std::io::Error::other)?;
     std::fs::write(dir.join("design.3mf"), package)?;
     written.push(PathBuf::from("design.3mf"));

@@ -13,9 +13,9 @@
 
 use std::fmt::Write;
 
-use crate::dynamics::{DynamicScene, TOP_EIGENVALUE};
+use crate::dynamics::TOP_EIGENVALUE;
 use crate::material::{Material, MaterialId, Palette};
-use crate::task::SimulatorSettings;
+use crate::task::{LayerLoadCase, SimulatorSettings};
 use crate::voxel::{GridDims, VoxelGrid};
 
 /// A design as VXA describes it.
@@ -53,29 +53,48 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
     let _ = writeln!(w, r#"<?xml version="1.0" encoding="ISO-8859-1"?>"#);
     let _ = writeln!(w, r#"<VXA Version="1.1">"#);
     if let Some(settings) = settings {
-        write_simulator(w, settings);
-        write_environment(w, &settings.scene);
+        write_simulator(w, settings, design.grid.filled_count());
+        write_environment(w, settings, design.grid.dims().ny);
     }
     let _ = writeln!(w, r#"<VXC Version="0.94">"#);
+    write_lattice(w, design.voxel_size);
+    let stroke = settings
+        .and_then(|s| s.scene.actuation.as_ref())
+        .map_or(0.0, |a| edge_stroke(a.amplitude_volume));
+    write_palette(w, &design.palette, stroke, "");
+    write_structure(w, &design.grid, "", "");
+    let _ = writeln!(w, "</VXC>");
+    let _ = writeln!(w, "</VXA>");
+    x
+}
+
+/// `<Lattice>` and `<Voxel>`: cubic voxels of edge `voxel_size`, m.
+pub(super) fn write_lattice(w: &mut String, voxel_size: f64) {
     let _ = writeln!(
         w,
-        "<Lattice><Lattice_Dim>{}</Lattice_Dim><X_Dim_Adj>1</X_Dim_Adj><Y_Dim_Adj>1</Y_Dim_Adj><Z_Dim_Adj>1</Z_Dim_Adj><X_Line_Offset>0</X_Line_Offset><Y_Line_Offset>0</Y_Line_Offset><X_Layer_Offset>0</X_Layer_Offset><Y_Layer_Offset>0</Y_Layer_Offset></Lattice>",
-        design.voxel_size
+        "<Lattice><Lattice_Dim>{voxel_size}</Lattice_Dim><X_Dim_Adj>1</X_Dim_Adj><Y_Dim_Adj>1</Y_Dim_Adj><Z_Dim_Adj>1</Z_Dim_Adj><X_Line_Offset>0</X_Line_Offset><Y_Line_Offset>0</Y_Line_Offset><X_Layer_Offset>0</X_Layer_Offset><Y_Layer_Offset>0</Y_Layer_Offset></Lattice>"
     );
     let _ = writeln!(
         w,
         "<Voxel><Vox_Name>BOX</Vox_Name><X_Squeeze>1</X_Squeeze><Y_Squeeze>1</Y_Squeeze><Z_Squeeze>1</Z_Squeeze></Voxel>"
     );
+}
+
+/// `<Palette>`, in ID order (readers of this family take the palette in file order and ignore
+/// the `ID` attribute). An actuated material expands by `stroke` per unit of the temperature
+/// swing; `actuated_extra` is appended to an actuated material's `<Mechanical>`.
+pub(super) fn write_palette(w: &mut String, palette: &Palette, stroke: f64, actuated_extra: &str) {
     let _ = writeln!(w, "<Palette>");
-    let amplitude = settings
-        .and_then(|s| s.scene.actuation.as_ref())
-        .map_or(0.0, |a| edge_stroke(a.amplitude_volume));
-    for (id, m) in design.palette.iter() {
-        let cte = if m.actuated { amplitude } else { 0.0 };
+    for (id, m) in palette.iter() {
+        let (cte, extra) = if m.actuated {
+            (stroke, actuated_extra)
+        } else {
+            (0.0, "")
+        };
         let [r, g, b] = m.colour.map(|c| f64::from(c) / 255.0);
         let _ = writeln!(
             w,
-            "<Material ID=\"{}\"><MatType>0</MatType><Name>{}</Name><Display><Red>{r}</Red><Green>{g}</Green><Blue>{b}</Blue><Alpha>1</Alpha></Display><Mechanical><MatModel>0</MatModel><Elastic_Mod>{}</Elastic_Mod><Plastic_Mod>0</Plastic_Mod><Yield_Stress>0</Yield_Stress><FailModel>0</FailModel><Fail_Stress>0</Fail_Stress><Fail_Strain>0</Fail_Strain><Density>{}</Density><Poissons_Ratio>{}</Poissons_Ratio><CTE>{cte}</CTE><uStatic>{}</uStatic><uDynamic>{}</uDynamic><Actuated>{}</Actuated></Mechanical></Material>",
+            "<Material ID=\"{}\"><MatType>0</MatType><Name>{}</Name><Display><Red>{r}</Red><Green>{g}</Green><Blue>{b}</Blue><Alpha>1</Alpha></Display><Mechanical><MatModel>0</MatModel><Elastic_Mod>{}</Elastic_Mod><Plastic_Mod>0</Plastic_Mod><Yield_Stress>0</Yield_Stress><FailModel>0</FailModel><Fail_Stress>0</Fail_Stress><Fail_Strain>0</Fail_Strain><Density>{}</Density><Poissons_Ratio>{}</Poissons_Ratio><CTE>{cte}</CTE><uStatic>{}</uStatic><uDynamic>{}</uDynamic><Actuated>{}</Actuated>{extra}</Mechanical></Material>",
             id.index() + 1,
             super::xml_escape(&m.name),
             m.youngs_modulus,
@@ -87,28 +106,30 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
         );
     }
     let _ = writeln!(w, "</Palette>");
-    let d = design.grid.dims();
+}
+
+/// `<Structure>` as VoxCAD's ASCII_READABLE layers, bottom layer first; `attributes` go into the
+/// opening tag after `Compression` (voxcraft's `replace`), `blocks` after the layers.
+pub(super) fn write_structure(w: &mut String, grid: &VoxelGrid, attributes: &str, blocks: &str) {
+    let d = grid.dims();
     let _ = writeln!(
         w,
-        "<Structure Compression=\"ASCII_READABLE\"><X_Voxels>{}</X_Voxels><Y_Voxels>{}</Y_Voxels><Z_Voxels>{}</Z_Voxels><Data>",
+        "<Structure Compression=\"ASCII_READABLE\"{attributes}><X_Voxels>{}</X_Voxels><Y_Voxels>{}</Y_Voxels><Z_Voxels>{}</Z_Voxels><Data>",
         d.nx, d.ny, d.nz
     );
     for z in 0..d.nz {
         // One character per voxel, x fastest then y: '0' empty, else '0' + the 1-based material
-        // ID (VoxCAD's ASCII_READABLE: '1'…'9', then ':' and up).
+        // ID ('1'…'9', then ':' and up).
         let layer: String = (0..d.ny)
             .flat_map(|y| (0..d.nx).map(move |x| (x, y)))
-            .map(|(x, y)| match design.grid.get(x, y, z) {
+            .map(|(x, y)| match grid.get(x, y, z) {
                 None => '0',
                 Some(m) => char::from(b'1'.saturating_add(m.0)),
             })
             .collect();
         let _ = writeln!(w, "<Layer><![CDATA[{layer}]]></Layer>");
     }
-    let _ = writeln!(w, "</Data></Structure>");
-    let _ = writeln!(w, "</VXC>");
-    let _ = writeln!(w, "</VXA>");
-    x
+    let _ = writeln!(w, "</Data>{blocks}</Structure>");
 }
 
 /// The reader's linear expansion per unit temperature that matches our volume sine's stroke: our
@@ -120,44 +141,108 @@ pub fn edge_stroke(amplitude_volume: f64) -> f64 {
 
 /// The reader's time-step fraction at most: at 1.0 its floor spring, which its step bound leaves
 /// out, makes a resting body drift (5.6 mm in 0.7 s measured); 0.9 is its own default.
-const READER_MAX_DT_FRACTION: f64 = 0.9;
+pub(super) const READER_MAX_DT_FRACTION: f64 = 0.9;
 
-fn write_simulator(w: &mut String, settings: &SimulatorSettings) {
-    let scene = &settings.scene;
-    let d = &scene.damping;
-    // Settling ends on a whole period, so the reader's sine, whose phase runs from t = 0, starts
-    // its first measured cycle at phase 0 as ours does.
-    let (settle, stop) = match &scene.actuation {
+/// When actuation starts and when the run stops, s, for readers whose sine's phase runs from
+/// t = 0: the settle is rounded up to a whole period, so the first measured cycle starts at phase
+/// 0 as ours does, and the stop is the task's cycles after it.
+pub(super) fn settle_and_stop(settings: &SimulatorSettings) -> (f64, f64) {
+    match &settings.scene.actuation {
         Some(a) => {
             let settle = (settings.settle_time / a.period).ceil() * a.period;
             (settle, settle + f64::from(settings.cycles) * a.period)
         }
         None => (settings.settle_time, settings.settle_time),
+    }
+}
+
+/// The reader's bond damping ratio for our link damping ratio. Readers of this family damp a link
+/// by ζ_v·√(m·k) per unit of relative velocity (2√m·ζ_v/dt on half a step's relative motion); ours
+/// is β·k = 2ζ·√(m·k)/√14, ζ being the ratio at the lattice's top mode (`TOP_EIGENVALUE`).
+pub(super) fn bond_damping_z(link: f64) -> f64 {
+    2.0 * link / TOP_EIGENVALUE.sqrt()
+}
+
+/// Kinetic energy, as a part of the least strain energy the load case stores, below which the
+/// reader's relaxation counts as rest: the displacement left is then about √ of it (1e-4).
+const REST_ENERGY_FRACTION: f64 = 1e-8;
+
+fn write_simulator(w: &mut String, settings: &SimulatorSettings, voxels: usize) {
+    let scene = &settings.scene;
+    let d = &scene.damping;
+    let (settle, stop) = settle_and_stop(settings);
+    // A load case relaxes with the reader's kinetic damping (every velocity zeroed at each peak of
+    // kinetic energy) until its kinetic energy stays below the rest level (stop type 5: per voxel
+    // below a thousandth of the value); a robot runs for its time.
+    let (stop_type, stop_value, equilibrium) = match &settings.load_case {
+        Some(case) => (
+            5,
+            1e3 * REST_ENERGY_FRACTION * case.min_strain_energy / voxels.max(1) as f64,
+            1,
+        ),
+        None => (2, stop, 0),
     };
     let _ = writeln!(
         w,
-        "<Simulator><Integration><Integrator>0</Integrator><DtFrac>{}</DtFrac></Integration><Damping><BondDampingZ>{}</BondDampingZ><ColDampingZ>{}</ColDampingZ><SlowDampingZ>{}</SlowDampingZ></Damping><Collisions><SelfColEnabled>{}</SelfColEnabled><ColSystem>3</ColSystem><CollisionHorizon>3</CollisionHorizon></Collisions><Features><FluidDampEnabled>0</FluidDampEnabled><PoissonKickBackEnabled>0</PoissonKickBackEnabled><EnforceLatticeEnabled>0</EnforceLatticeEnabled></Features><StopCondition><StopConditionType>2</StopConditionType><StopConditionValue>{stop}</StopConditionValue><InitCmTime>{settle}</InitCmTime></StopCondition><GA><FitnessFileName>fitness.xml</FitnessFileName></GA></Simulator>",
+        "<Simulator><Integration><Integrator>0</Integrator><DtFrac>{}</DtFrac></Integration><Damping><BondDampingZ>{}</BondDampingZ><ColDampingZ>{}</ColDampingZ><SlowDampingZ>{}</SlowDampingZ></Damping><Collisions><SelfColEnabled>{}</SelfColEnabled><ColSystem>3</ColSystem><CollisionHorizon>3</CollisionHorizon></Collisions><Features><FluidDampEnabled>0</FluidDampEnabled><PoissonKickBackEnabled>0</PoissonKickBackEnabled><EnforceLatticeEnabled>0</EnforceLatticeEnabled></Features><StopCondition><StopConditionType>{stop_type}</StopConditionType><StopConditionValue>{stop_value:e}</StopConditionValue><InitCmTime>{settle}</InitCmTime></StopCondition><EquilibriumMode><EquilibriumModeEnabled>{equilibrium}</EquilibriumModeEnabled></EquilibriumMode><GA><FitnessFileName>fitness.xml</FitnessFileName></GA></Simulator>",
         scene.dt_fraction.min(READER_MAX_DT_FRACTION),
-        2.0 * d.link / TOP_EIGENVALUE.sqrt(),
+        bond_damping_z(d.link),
         d.contact,
         d.global,
         u8::from(scene.collisions),
     );
 }
 
-fn write_environment(w: &mut String, scene: &DynamicScene) {
+fn write_environment(w: &mut String, settings: &SimulatorSettings, ny: usize) {
+    let scene = &settings.scene;
     let (temp_enabled, period, growth) = match &scene.actuation {
         Some(a) => (1, a.period, 2.0 * edge_stroke(a.amplitude_volume)),
         None => (0, 1.0, 0.0),
     };
+    let _ = write!(w, "<Environment>");
+    write_boundary_conditions(w, settings.load_case.as_ref(), ny);
     let _ = writeln!(
         w,
-        "<Environment><Fixed_Regions><NumFixed>0</NumFixed></Fixed_Regions><Forced_Regions><NumForced>0</NumForced></Forced_Regions><Gravity><GravEnabled>{}</GravEnabled><GravAcc>{}</GravAcc><FloorEnabled>{}</FloorEnabled></Gravity><Thermal><TempEnabled>{temp_enabled}</TempEnabled><TempAmp>1</TempAmp><TempBase>0</TempBase><TempAmplitude>1</TempAmplitude><VaryTempEnabled>{temp_enabled}</VaryTempEnabled><TempPeriod>{period}</TempPeriod></Thermal><GrowthAmplitude>{growth}</GrowthAmplitude></Environment>",
+        "<Gravity><GravEnabled>{}</GravEnabled><GravAcc>{}</GravAcc><FloorEnabled>{}</FloorEnabled></Gravity><Thermal><TempEnabled>{temp_enabled}</TempEnabled><TempAmp>1</TempAmp><TempBase>0</TempBase><TempAmplitude>1</TempAmplitude><VaryTempEnabled>{temp_enabled}</VaryTempEnabled><TempPeriod>{period}</TempPeriod></Thermal><GrowthAmplitude>{growth}</GrowthAmplitude></Environment>",
         u8::from(scene.gravity > 0.0),
         -scene.gravity,
         u8::from(scene.floor.is_some()),
     );
 }
+
+/// The clamp and the tip load as two box regions in the reader's workspace fractions. A voxel
+/// belongs to a region when its cube overlaps the box, so each box is the middle half of its
+/// layer (a box flush with the layer's faces would also catch the next layer wherever rounding
+/// lets the faces overlap). The reader shares a region's force equally among its voxels, as we do.
+fn write_boundary_conditions(w: &mut String, case: Option<&LayerLoadCase>, ny: usize) {
+    let Some(case) = case else {
+        let _ = write!(
+            w,
+            "<Boundary_Conditions><NumBCs>0</NumBCs></Boundary_Conditions>"
+        );
+        return;
+    };
+    let layer = 1.0 / ny as f64;
+    let region = |y: f64, dof_fixed: u8, force: [f64; 3]| {
+        format!(
+            "<FRegion><PrimType>0</PrimType><X>0</X><Y>{}</Y><Z>0</Z><dX>1</dX><dY>{}</dY><dZ>1</dZ><Radius>0</Radius><R>0.5</R><G>0.5</G><B>0.5</B><alpha>1</alpha><DofFixed>{dof_fixed}</DofFixed><ForceX>{}</ForceX><ForceY>{}</ForceY><ForceZ>{}</ForceZ><TorqueX>0</TorqueX><TorqueY>0</TorqueY><TorqueZ>0</TorqueZ><DisplaceX>0</DisplaceX><DisplaceY>0</DisplaceY><DisplaceZ>0</DisplaceZ><AngDisplaceX>0</AngDisplaceX><AngDisplaceY>0</AngDisplaceY><AngDisplaceZ>0</AngDisplaceZ></FRegion>",
+            y + 0.25 * layer,
+            0.5 * layer,
+            force[0],
+            force[1],
+            force[2]
+        )
+    };
+    let _ = write!(
+        w,
+        "<Boundary_Conditions><NumBCs>2</NumBCs>{}{}</Boundary_Conditions>",
+        region(0.0, ALL_DEGREES_OF_FREEDOM, [0.0; 3]),
+        region((ny - 1) as f64 * layer, 0, case.tip_force),
+    );
+}
+
+/// The reader's bit mask of fixed degrees of freedom: x, y, z, and the three rotations.
+const ALL_DEGREES_OF_FREEDOM: u8 = 63;
 
 /// Reads the design (lattice, palette, structure) of a VXA file.
 pub fn read_vxa(text: &str) -> Result<VxaDesign, VxaError> {

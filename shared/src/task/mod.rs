@@ -47,7 +47,8 @@ pub struct Artefact {
     pub caption: Option<String>,
 }
 
-/// A dynamic task's simulation as another simulator should run it: the physics, and how long.
+/// A task's simulation as another simulator should run it: the physics, and how long. A static
+/// task (a beam) is run there by dynamic relaxation of its load case.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulatorSettings {
     pub scene: DynamicScene,
@@ -55,6 +56,22 @@ pub struct SimulatorSettings {
     pub settle_time: f64,
     /// Actuation cycles measured after settling.
     pub cycles: u32,
+    /// The static load case to relax to, for a static task; `None` for a robot.
+    pub load_case: Option<LayerLoadCase>,
+}
+
+/// The cantilever load case as a simulator without a static solver should run it: the root layer
+/// (y = 0) clamped in all six degrees of freedom, `tip_force` shared equally by the voxels of the
+/// free-end layer (y = ny − 1), relaxed until the kinetic energy left is a negligible part of
+/// `min_strain_energy`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerLoadCase {
+    /// Total force on the free-end layer, N.
+    pub tip_force: [f64; 3],
+    /// The strain energy the load stores in the stiffest design the scene allows (the full box
+    /// of its stiffest material, as a slender beam: ½F·FL³/(3EI)), J. Every design stores at least
+    /// this, so a kinetic energy set against it means rest for every design.
+    pub min_strain_energy: f64,
 }
 
 /// A task: its scene is `Self`, its measurements `Self::Metrics`.

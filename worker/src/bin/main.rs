@@ -98,7 +98,8 @@ enum Command {
     },
     /// Writes the fabrication files of a genome at a resolution: one STL per material (mm),
     /// design.3mf, design.vxa for VoxCAD/Voxelyze, design.png and one SVG per laser-cut layer;
-    /// for a robot also animation.gif and trajectory.png/.csv (it is simulated once more).
+    /// for a robot also voxcraft/base.vxa and voxcraft/design.vxd for voxcraft-sim, animation.gif
+    /// and trajectory.png/.csv (it is simulated once more).
     Export {
         #[command(flatten)]
         design: Design,

@@ -14,7 +14,8 @@ pub use scene::{BeamMetrics, BeamScene};
 pub use target::{NamedProfile, TargetProfile};
 
 use super::cantilever::check_cantilever_dims;
-use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use super::{Artefact, Figure, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome};
+use crate::dynamics::DynamicScene;
 use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
 use crate::material::Palette;
@@ -114,7 +115,32 @@ impl Task for BeamScene {
         report::write_profile(dir, metrics)
     }
 
-    fn simulator_settings(&self, _dims: GridDims) -> Option<SimulatorSettings> {
-        None
+    /// The cantilever in free space, no gravity, the link damping of the dynamics' default, with
+    /// the tip load; a reader relaxes it to rest (VXA exports, docs/exports.md).
+    fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
+        let voxel_size = self.length / dims.ny as f64;
+        let stiffest = self
+            .palette
+            .0
+            .iter()
+            .map(|m| m.youngs_modulus)
+            .fold(0.0, f64::max);
+        let (width, height) = (dims.nx as f64 * voxel_size, dims.nz as f64 * voxel_size);
+        let inertia = width * height.powi(3) / 12.0;
+        let deflection = self.tip_load * self.length.powi(3) / (3.0 * stiffest * inertia);
+        Some(SimulatorSettings {
+            scene: DynamicScene {
+                voxel_size,
+                gravity: 0.0,
+                floor: None,
+                ..DynamicScene::default()
+            },
+            settle_time: 0.0,
+            cycles: 0,
+            load_case: Some(LayerLoadCase {
+                tip_force: [0.0, 0.0, -self.tip_load],
+                min_strain_energy: 0.5 * self.tip_load * deflection,
+            }),
+        })
     }
 }

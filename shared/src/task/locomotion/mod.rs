@@ -146,6 +146,7 @@ impl Task for LocomotionScene {
             scene: self.dynamics_at(dims),
             settle_time: self.settle.max_time,
             cycles: self.actuation_cycles,
+            load_case: None,
         })
     }
 }
