@@ -205,3 +205,69 @@ fn a_diverged_simulation_stays_as_it_was_found() {
     assert_eq!((sim.time(), sim.steps()), (time, steps));
     assert_eq!(sim.positions(), &positions[..]);
 }
+
+/// One actuated voxel resting on the floor, actuated slowly (1 s against a contact period of
+/// ~2 ms, critically damped): its centre sits where the floor spring carries its weight, z = r − mg/k,
+/// r being how far the floor reaches the centre. With `actuated_contact` r is half the swelling
+/// size, s/2·λ(t), so the centre rises and falls with the swelling; without it r stays s/2.
+fn lone_voxel_heights(actuated_contact: bool) -> Vec<(f64, f64)> {
+    let mut m = Material::new("actuated", 1.0e6, 0.35);
+    m.actuated = true;
+    let grid = VoxelGrid::filled(GridDims::new(1, 1, 1), MaterialId(0));
+    let scene = DynamicScene {
+        voxel_size: 0.01,
+        floor: Some(Floor {
+            actuated_contact,
+            ..Floor::default()
+        }),
+        actuation: Some(Actuation {
+            amplitude_volume: 0.2,
+            period: 1.0,
+            phase: 0.0,
+        }),
+        damping: DampingParams {
+            link: 1.0,
+            global: 0.0,
+            contact: 1.0,
+        },
+        ..DynamicScene::default()
+    };
+    let mut sim = Simulation::new(&grid, &Palette(vec![m]), &scene).unwrap();
+    sim.run_for(0.05).unwrap(); // settle onto the floor
+    sim.start_actuation();
+    sim.run_for(0.25).unwrap(); // start-up transient
+    let mut samples = Vec::new();
+    let steps = (1.0 / sim.dt()) as u64;
+    for i in 0..steps {
+        sim.step().unwrap();
+        if i % 50 == 0 {
+            samples.push((sim.actuation_factor(), sim.positions()[0].z));
+        }
+    }
+    samples
+}
+
+#[test]
+fn an_actuated_voxel_meets_the_floor_at_its_actuated_size_when_asked() {
+    let (s, k, mg) = (
+        0.01,
+        1.0e6 * 0.01,
+        Material::new("m", 1.0e6, 0.35).density * 1e-6 * G,
+    );
+    // The swing of the centre the swelling alone would give: s/2·(λmax − λmin) ≈ 0.32 mm.
+    let swing = 0.5 * s * (1.2f64.cbrt() - 0.8f64.cbrt());
+    // Quasi-static tracking error of a critically damped contact at 1/500 of its frequency:
+    // a phase lag of 2ζω/ωn ≈ 0.004 rad of the swing (~1.3 µm); 2 % of the swing bounds it.
+    let tolerance = 0.02 * swing;
+    for (lambda, z) in lone_voxel_heights(true) {
+        let expected = 0.5 * s * lambda - mg / k;
+        assert!(
+            (z - expected).abs() < tolerance,
+            "at λ = {lambda:.4} the centre is at {z:.6e} m, the floor spring puts it at {expected:.6e} m"
+        );
+    }
+    let rest: Vec<f64> = lone_voxel_heights(false).iter().map(|&(_, z)| z).collect();
+    for z in &rest {
+        assert!((z - (0.5 * s - mg / k)).abs() < tolerance, "{z:.6e}");
+    }
+}

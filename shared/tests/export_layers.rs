@@ -118,3 +118,81 @@ fn every_sheet_parses_and_the_alignment_holes_coincide() {
     }
     assert!(holes.windows(2).all(|w| w[0] == w[1]));
 }
+
+/// The sheet follows the colour and line conventions laser drivers map to operations: every cut
+/// (outlines, alignment holes) is an unfilled pure-red hairline of at most 0.001 in, nothing else
+/// is red; engraving is black text or a blue hairline; each material's cuts sit in a layer named
+/// after the material; a ring's hole is cut before its outline.
+#[test]
+fn cuts_are_red_hairlines_in_a_layer_per_material_with_holes_first() {
+    // A ring of material 0 around one cell of material 1.
+    let grid = grid_from(GridDims::new(3, 3, 1), &[1, 1, 1, 1, 2, 1, 1, 1, 1]);
+    let palette = Palette::hard_soft_resins();
+    let svg = layer_svg(&grid, &palette, 1e-3, 0);
+    let doc = roxmltree::Document::parse(&svg).expect("well-formed SVG");
+    let inkscape = "http://www.inkscape.org/namespaces/inkscape";
+    let mut cuts = 0;
+    for n in doc
+        .descendants()
+        .filter(|n| n.attribute("stroke").is_some())
+    {
+        let stroke = n.attribute("stroke").unwrap();
+        let width: f64 = n.attribute("stroke-width").unwrap().parse().unwrap();
+        assert!(width <= 0.0254, "{width} mm is not a hairline");
+        assert_eq!(
+            n.attribute("fill"),
+            Some("none"),
+            "a stroked {n:?} is filled"
+        );
+        if n.attribute("class") == Some("cut") || n.has_tag_name("circle") {
+            assert_eq!(stroke, "#ff0000");
+            cuts += 1;
+        } else {
+            assert_eq!(stroke, "#0000ff", "{n:?}");
+        }
+    }
+    assert_eq!(cuts, 2 + 3, "two material paths and three alignment holes");
+    for text in doc.descendants().filter(|n| n.has_tag_name("text")) {
+        assert_eq!(text.attribute("fill"), Some("#000000"));
+    }
+    for (id, material) in palette.iter() {
+        let layer = doc
+            .descendants()
+            .find(|n| n.attribute("id") == Some(&format!("material-{}", id.index())))
+            .expect("a layer per material present");
+        assert_eq!(
+            layer.attribute((inkscape, "label")),
+            Some(format!("cut {}", material.name).as_str())
+        );
+        assert_eq!(layer.attribute((inkscape, "groupmode")), Some("layer"));
+    }
+    // Material 0's path: the hole (1 mm²) before the outline (9 mm²).
+    let ring = doc
+        .descendants()
+        .find(|n| n.attribute("data-material") == Some("0"))
+        .unwrap();
+    let areas: Vec<f64> = ring
+        .attribute("d")
+        .unwrap()
+        .split('Z')
+        .filter(|p| !p.trim().is_empty())
+        .map(|sub| {
+            let numbers: Vec<f64> = sub
+                .split(|c: char| c == 'M' || c == 'L' || c.is_whitespace())
+                .filter(|t| !t.is_empty())
+                .map(|t| t.parse().unwrap())
+                .collect();
+            let points: Vec<[f64; 2]> = numbers.chunks(2).map(|c| [c[0], c[1]]).collect();
+            let n = points.len();
+            (0..n)
+                .map(|i| {
+                    let (p, q) = (points[i], points[(i + 1) % n]);
+                    p[0] * q[1] - q[0] * p[1]
+                })
+                .sum::<f64>()
+                .abs()
+                / 2.0
+        })
+        .collect();
+    assert_eq!(areas, vec![1.0, 9.0]);
+}

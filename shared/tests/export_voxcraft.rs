@@ -21,7 +21,7 @@ fn grid(cells: &[u8], dims: GridDims) -> VoxelGrid {
 
 fn robot_settings() -> SimulatorSettings {
     LocomotionScene::default()
-        .simulator_settings(GridDims::new(20, 20, 20))
+        .simulator_settings(GridDims::new(20, 20, 20), None)
         .expect("a robot has dynamics settings")
 }
 

@@ -5,7 +5,8 @@ use amorph::dynamics::foam_palette;
 use amorph::export::{VxaDesign, read_vxa, write_vxa};
 use amorph::material::{MaterialId, Palette};
 use amorph::task::beam::{BeamScene, NamedProfile};
-use amorph::task::{SimulatorSettings, Task, locomotion::LocomotionScene};
+use amorph::task::locomotion::{LocomotionMetrics, LocomotionScene};
+use amorph::task::{SimulatorSettings, Task};
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
 
@@ -25,7 +26,7 @@ fn design(cells: &[u8], dims: GridDims, palette: Palette) -> VxaDesign {
 
 /// The paper's robot task at 20x20x20, as `worker export` writes it.
 fn robot_settings() -> Option<SimulatorSettings> {
-    LocomotionScene::default().simulator_settings(GridDims::new(20, 20, 20))
+    LocomotionScene::default().simulator_settings(GridDims::new(20, 20, 20), None)
 }
 
 proptest! {
@@ -76,9 +77,19 @@ fn the_scene_settings_are_written_for_voxelyze() {
     assert_eq!(ctes[0], 0.0);
     assert!((ctes[1] - stroke).abs() < 1e-15 && (ctes[1] - 0.0672).abs() < 1e-4);
     assert!(value("GrowthAmplitude") >= stroke);
-    // Settling (at most 0.5 s) ends on a whole period (8 × 0.07 s), then ten cycles are measured.
-    assert!((value("InitCmTime") - 0.56).abs() < 1e-12);
-    assert!((value("StopConditionValue") - (0.56 + 10.0 * 0.07)).abs() < 1e-12);
+    // Settling (at most 0.5 s), then ten cycles are measured; every voxel's phase offset puts the
+    // reader's sine, counted from t = 0, at phase 0 when the settle ends, as ours starts.
+    assert!((value("InitCmTime") - 0.5).abs() < 1e-12);
+    assert!((value("StopConditionValue") - (0.5 + 10.0 * 0.07)).abs() < 1e-12);
+    let offsets = phase_offsets(&doc);
+    assert_eq!(offsets.len(), 2, "one per cell of the 2x1x1 grid");
+    for phi in offsets {
+        let cycles_at_start = value("InitCmTime") / value("TempPeriod") + phi;
+        assert!(
+            (cycles_at_start - cycles_at_start.round()).abs() < 1e-9,
+            "the reader's sine starts at phase {cycles_at_start} cycles"
+        );
+    }
     assert!(value("DtFrac") <= 0.9);
     // The reader's bond ratio refers to one bond, ours to the lattice's top mode (ω² = 14 k/m).
     let link = LocomotionScene::default()
@@ -95,6 +106,10 @@ fn the_scene_settings_are_written_for_voxelyze() {
         Some("fitness.xml"),
         "the reader writes a result only when named"
     );
+    // Its result's distance is unsigned; the centre-of-mass trace (20 samples a period, as our
+    // trajectory.csv) carries the sign.
+    assert_eq!(value("SaveTraces"), 1.0);
+    assert!((value("TimeBetweenTraces") - 0.07 / 20.0).abs() < 1e-15);
 }
 
 /// A beam is written as its load case for the reader to relax: clamp and load regions that catch
@@ -105,7 +120,7 @@ fn a_beam_is_written_as_its_clamped_and_loaded_layers() {
     let scene = BeamScene::new(NamedProfile::CircularArc);
     let dims = GridDims::new(6, 20, 6);
     let settings = scene
-        .simulator_settings(dims)
+        .simulator_settings(dims, None)
         .expect("a beam has a load case");
     let d = design(&[2; 6 * 20 * 6], dims, Palette::hard_soft_resins());
     let text = write_vxa(&d, Some(&settings));
@@ -164,6 +179,60 @@ fn a_beam_is_written_as_its_clamped_and_loaded_layers() {
         (total / least - 1e-8).abs() < 1e-20,
         "{total} against {least}"
     );
+}
+
+/// Every `<PhaseOffset>` entry of a VXA, in cycles.
+fn phase_offsets(doc: &roxmltree::Document) -> Vec<f64> {
+    doc.descendants()
+        .filter(|n| n.has_tag_name("PhaseOffset"))
+        .flat_map(|n| n.children().filter(|c| c.has_tag_name("Layer")))
+        .flat_map(|layer| {
+            layer
+                .text()
+                .unwrap()
+                .split(',')
+                .map(|v| v.parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// With the design's outcome, the settle written is the one its evaluation measured (0.12 s),
+/// and the phase offset starts the reader's sine there: 0.12 s is 1.714 periods of 0.07 s, so
+/// the offset is 0.286 of a period; the reader starts actuating when ours did, in the same phase.
+#[test]
+fn a_robots_own_settle_is_written_when_its_outcome_is_known() {
+    let scene = LocomotionScene::default();
+    let metrics = LocomotionMetrics {
+        displacement: 0.01,
+        gait_displacement: 0.01,
+        lateral: 0.0,
+        speed_percent_per_cycle: 5.0,
+        body_length: 0.02,
+        voxels: 2,
+        material_counts: vec![1, 1],
+        steps: 1000,
+        dt: 1e-5,
+        simulated_time: 0.82,
+        settle_time: 0.12,
+        centre_of_mass_trace: Vec::new(),
+    };
+    let dims = GridDims::new(20, 20, 20);
+    let own = scene.simulator_settings(dims, Some(&metrics)).unwrap();
+    let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
+    let text = write_vxa(&d, Some(&own));
+    let number = |name: &str| -> f64 {
+        let start = text.find(&format!("<{name}>")).unwrap() + name.len() + 2;
+        text[start..].split('<').next().unwrap().parse().unwrap()
+    };
+    assert!((number("InitCmTime") - 0.12).abs() < 1e-12);
+    assert!((number("StopConditionValue") - (0.12 + 0.7)).abs() < 1e-12);
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    for phi in phase_offsets(&doc) {
+        assert!((phi - (2.0 - 0.12 / 0.07)).abs() < 1e-12, "{phi}");
+    }
+    let bound = scene.simulator_settings(dims, None).unwrap();
+    assert_eq!(bound.settle_time, scene.settle.max_time);
 }
 
 #[test]

@@ -137,8 +137,12 @@ impl ResultWriter {
             &self.dir.join("best_voxels.json"),
             &voxels_json(&grid, scene),
         )?;
-        let mut exports =
-            amorph::export::write_fabrication_files(&self.dir.join("exports"), &grid, scene)?;
+        let mut exports = amorph::export::write_fabrication_files(
+            &self.dir.join("exports"),
+            &grid,
+            scene,
+            Some(&best.outcome),
+        )?;
         exports.extend(amorph::export::write_smooth_surfaces(
             &self.dir.join("exports"),
             &best.genome,

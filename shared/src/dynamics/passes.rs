@@ -41,13 +41,25 @@ pub struct FloorContact {
     pub sticking: Vec<bool>,
 }
 
-/// Floor at z = 0 with penalty contact (a voxel touches when its centre is within s/2) and
-/// Coulomb friction with a static/kinetic state per voxel. Runs after every other force pass,
-/// because sticking depends on the voxel's total tangential force.
+/// Floor at z = 0 with penalty contact (a voxel touches when its centre is within half its size:
+/// `half_size`, or `actuated_half_size` for an actuated voxel) and Coulomb friction with a
+/// static/kinetic state per voxel. Runs after every other force pass, because sticking depends on
+/// the voxel's total tangential force.
 #[inline(never)]
-pub fn floor_pass(voxels: &mut Voxels, contact: &mut FloorContact, half_size: f64, dt: f64) {
+pub fn floor_pass(
+    voxels: &mut Voxels,
+    contact: &mut FloorContact,
+    half_size: f64,
+    actuated_half_size: f64,
+    dt: f64,
+) {
     for i in 0..voxels.len() {
-        let penetration = half_size - voxels.position[i].z;
+        let reach = if voxels.actuated[i] {
+            actuated_half_size
+        } else {
+            half_size
+        };
+        let penetration = reach - voxels.position[i].z;
         if penetration <= 0.0 {
             contact.sticking[i] = false;
             continue;

@@ -73,6 +73,13 @@ pub struct Floor {
     /// The direction in the floor plane that is downhill, rad from +X towards +Y. Default 0
     /// (downhill is +X).
     pub downhill: f64,
+    /// Whether an actuated voxel meets the floor at its actuated size (its underside moves with
+    /// its swelling, so a swelling foot pushes the body up), as Voxelyze's floor does, rather than
+    /// at its rest size. Default false, the contact of every result before it (docs/dynamics.md,
+    /// "Floor contact at the actuated size"); not written when false, so earlier scenes encode
+    /// to the same bytes.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub actuated_contact: bool,
 }
 
 impl Default for Floor {
@@ -81,6 +88,7 @@ impl Default for Floor {
             stiffness_factor: 1.0,
             incline: 0.0,
             downhill: 0.0,
+            actuated_contact: false,
         }
     }
 }

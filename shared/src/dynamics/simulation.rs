@@ -366,12 +366,20 @@ impl Simulation {
                 Pass::Collisions => self
                     .collisions
                     .pass(&mut self.voxels, self.scene.voxel_size),
-                Pass::Floor => floor_pass(
-                    &mut self.voxels,
-                    &mut self.floor,
-                    0.5 * self.scene.voxel_size,
-                    self.dt,
-                ),
+                Pass::Floor => {
+                    let half = 0.5 * self.scene.voxel_size;
+                    let actuated_half = match &self.scene.floor {
+                        Some(f) if f.actuated_contact => half * link_step.actuation_factor,
+                        _ => half,
+                    };
+                    floor_pass(
+                        &mut self.voxels,
+                        &mut self.floor,
+                        half,
+                        actuated_half,
+                        self.dt,
+                    )
+                }
                 Pass::Integrate => summary = Some(integrate_pass(&mut self.voxels, self.dt)),
             }
         }
@@ -507,7 +515,18 @@ impl Simulation {
                 gravitational -= f.dot(v.position[i]);
             }
             if !self.floor.stiffness.is_empty() {
-                let pen = (0.5 * s - v.position[i].z).max(0.0);
+                let reach = if v.actuated[i]
+                    && self
+                        .scene
+                        .floor
+                        .as_ref()
+                        .is_some_and(|f| f.actuated_contact)
+                {
+                    0.5 * s * self.actuation_factor()
+                } else {
+                    0.5 * s
+                };
+                let pen = (reach - v.position[i].z).max(0.0);
                 contact += 0.5 * self.floor.stiffness[i] * pen * pen;
             }
         }

@@ -15,6 +15,8 @@ const MARGIN_MM: f64 = 6.0;
 const PIN_DIAMETER_MM: f64 = 2.0;
 /// Scale bar length, mm.
 const SCALE_BAR_MM: f64 = 10.0;
+/// Room for the scale bar's label ("10 mm" at 2.5 mm type) after a 1 mm gap, mm.
+const LABEL_MM: f64 = 9.0;
 
 /// A closed contour in layer coordinates (units of voxels, x right, y up), counter-clockwise
 /// around material, clockwise around holes.
@@ -121,28 +123,46 @@ pub fn alignment_holes_mm(grid: &VoxelGrid, voxel_size: f64) -> [[f64; 2]; 3] {
     [[-o, -o], [w + o, -o], [-o, h + o]]
 }
 
-/// One SVG sheet for layer `z`: cut paths per material (stroke in the material's colour), the
-/// alignment holes, the engraved layer number and a scale bar. Millimetres throughout (the SVG's
-/// user unit is 1 mm), y pointing down the sheet with the design's y up.
+/// Stroke of every cut (material outlines, alignment holes): pure red, the colour laser drivers
+/// (Epilog, Trotec, Universal, LightBurn's defaults) and shops map to "vector cut".
+const CUT_STROKE: &str = "#ff0000";
+/// Stroke of vector engraving (the scale bar): pure blue, the usual "score" colour.
+const SCORE_STROKE: &str = "#0000ff";
+/// Fill of raster engraving (the layer number and labels): black.
+const RASTER_FILL: &str = "#000000";
+/// Hairline, mm: 0.001 in, which drivers take as a vector line rather than a shape to raster.
+const HAIRLINE_MM: f64 = 0.0254;
+
+/// One SVG sheet for layer `z`, in the colour and line conventions laser software expects: each
+/// material's outlines as red hairline cuts in a layer named after the material (so one stock sheet
+/// per material can be cut with the others hidden; holes written before the outline around them so
+/// a driver cutting in file order frees the inner scrap while the part is still held), the
+/// alignment holes as cuts, the layer number engraved in black and a scale bar scored in blue.
+/// Millimetres throughout (the SVG's user unit is 1 mm), y pointing down the sheet with the
+/// design's y up.
 pub fn layer_svg(grid: &VoxelGrid, palette: &Palette, voxel_size: f64, z: usize) -> String {
     let d = grid.dims();
     let s = voxel_size * 1e3;
     let (w, h) = (d.nx as f64 * s, d.ny as f64 * s);
-    let (sheet_w, sheet_h) = (w + 2.0 * MARGIN_MM, h + 2.0 * MARGIN_MM + 8.0);
+    // Wide enough for the scale bar and its label under a narrow design.
+    let sheet_w = (w + 2.0 * MARGIN_MM).max(2.0 * MARGIN_MM + SCALE_BAR_MM + LABEL_MM);
+    let sheet_h = h + 2.0 * MARGIN_MM + 8.0;
     // Design coordinates (mm, y up, corner at 0) to sheet coordinates.
     let to_sheet = |x: f64, y: f64| (x + MARGIN_MM, MARGIN_MM + h - y);
     let mut out = String::new();
     let o = &mut out;
     let _ = writeln!(
         o,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{sheet_w}mm" height="{sheet_h}mm" viewBox="0 0 {sheet_w} {sheet_h}">"#
+        r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" width="{sheet_w}mm" height="{sheet_h}mm" viewBox="0 0 {sheet_w} {sheet_h}">"#
     );
     let _ = writeln!(o, "<title>layer {} of {}</title>", z + 1, d.nz);
     for (id, material) in palette.iter() {
-        let contours = layer_contours(grid, z, id);
+        let mut contours = layer_contours(grid, z, id);
         if contours.is_empty() {
             continue;
         }
+        // Holes (clockwise, negative area) first: inner cuts before outer ones.
+        contours.sort_by_key(|c| signed_area(c) > 0);
         let [r, g, b] = material.colour;
         let mut path = String::new();
         for contour in &contours {
@@ -152,35 +172,54 @@ pub fn layer_svg(grid: &VoxelGrid, palette: &Palette, voxel_size: f64, z: usize)
             }
             path.push_str("Z ");
         }
+        let name = super::xml_escape(&material.name);
         let _ = writeln!(
             o,
-            r#"<path class="cut" data-material="{}" fill="none" stroke="rgb({r},{g},{b})" stroke-width="0.1" d="{}"/>"#,
+            r#"<g id="material-{}" inkscape:groupmode="layer" inkscape:label="cut {name}" data-colour="rgb({r},{g},{b})"><path class="cut" data-material="{}" fill="none" stroke="{CUT_STROKE}" stroke-width="{HAIRLINE_MM}" d="{}"/></g>"#,
+            id.index(),
             id.index(),
             path.trim_end()
         );
     }
+    let _ = writeln!(
+        o,
+        r#"<g id="alignment" inkscape:groupmode="layer" inkscape:label="cut alignment holes">"#
+    );
     for [x, y] in alignment_holes_mm(grid, voxel_size) {
         let (cx, cy) = to_sheet(x, y);
         let _ = writeln!(
             o,
-            r#"<circle class="alignment" cx="{cx}" cy="{cy}" r="{}" fill="none" stroke="black" stroke-width="0.1"/>"#,
+            r#"<circle class="alignment" cx="{cx}" cy="{cy}" r="{}" fill="none" stroke="{CUT_STROKE}" stroke-width="{HAIRLINE_MM}"/>"#,
             PIN_DIAMETER_MM / 2.0
         );
     }
+    let _ = writeln!(o, "</g>");
     let (tx, ty) = to_sheet(w + MARGIN_MM / 2.0, h + MARGIN_MM / 2.0);
-    let _ = writeln!(
-        o,
-        r#"<text class="engrave" x="{tx}" y="{ty}" font-size="3" text-anchor="end" fill="blue">{}</text>"#,
-        z + 1
-    );
     let bar_y = sheet_h - 4.0;
     let _ = writeln!(
         o,
-        r#"<g class="engrave scale-bar"><line x1="{MARGIN_MM}" y1="{bar_y}" x2="{}" y2="{bar_y}" stroke="blue" stroke-width="0.3"/><text x="{}" y="{}" font-size="2.5" fill="blue">{SCALE_BAR_MM} mm</text></g>"#,
+        r#"<g id="engrave" inkscape:groupmode="layer" inkscape:label="engrave"><text class="engrave" x="{tx}" y="{ty}" font-size="3" font-family="sans-serif" text-anchor="end" fill="{RASTER_FILL}">{}</text>"#,
+        z + 1
+    );
+    let _ = writeln!(
+        o,
+        r#"<g class="score scale-bar"><line x1="{MARGIN_MM}" y1="{bar_y}" x2="{}" y2="{bar_y}" fill="none" stroke="{SCORE_STROKE}" stroke-width="{HAIRLINE_MM}"/><text x="{}" y="{}" font-size="2.5" font-family="sans-serif" fill="{RASTER_FILL}">{SCALE_BAR_MM} mm</text></g></g>"#,
         MARGIN_MM + SCALE_BAR_MM,
         MARGIN_MM + SCALE_BAR_MM + 1.0,
         bar_y + 1.0
     );
     let _ = writeln!(o, "</svg>");
     out
+}
+
+/// Twice the signed area of a contour in voxel units: positive around material, negative around
+/// a hole.
+fn signed_area(contour: &Contour) -> i64 {
+    let n = contour.len();
+    (0..n)
+        .map(|i| {
+            let (p, q) = (contour[i], contour[(i + 1) % n]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum()
 }

@@ -55,13 +55,16 @@ pub fn material_meshes_mm(
 }
 
 /// Writes every fabrication file of a design into `dir`: `material-<i>-<name>.stl` per material
-/// present, `design.3mf` (all materials), `design.vxa` (with the scene's dynamics settings for a
-/// robot), for a robot voxcraft-sim's pair `voxcraft/base.vxa` and `voxcraft/design.vxd`, and
-/// `layers/layer-<z>.svg` per voxel layer. Returns the files written, relative to `dir`.
+/// present, `design.3mf` (all materials), `design.vxa` (with the scene's simulation settings: a
+/// robot's protocol, a beam's load case; with the design's `outcome`, its own measured settle),
+/// for a robot voxcraft-sim's pair `voxcraft/base.vxa` (the task's settings, shared by every
+/// design) and `voxcraft/design.vxd`, and `layers/layer-<z>.svg` per voxel layer. Returns the
+/// files written, relative to `dir`.
 pub fn write_fabrication_files(
     dir: &std::path::Path,
     grid: &VoxelGrid,
     scene: &crate::task::Scene,
+    outcome: Option<&crate::task::Outcome>,
 ) -> std::io::Result<Vec<std::path::PathBuf>> {
     use std::path::PathBuf;
     let palette = scene.palette();
@@ -82,7 +85,7 @@ pub fn write_fabrication_files(
         std::io::Write::flush(&mut file)?;
         written.push(name);
     }
-    let settings = scene.simulator_settings(grid.dims());
+    let settings = scene.simulator_settings(grid.dims(), outcome);
     let vxa = write_vxa(
         &VxaDesign {
             grid: grid.clone(),
@@ -94,12 +97,13 @@ pub fn write_fabrication_files(
     std::fs::write(dir.join("design.vxa"), vxa)?;
     written.push(PathBuf::from("design.vxa"));
     // voxcraft-sim's pair for a robot only: the load case's relaxation has not been checked there.
-    if let Some(settings) = settings.as_ref().filter(|s| s.load_case.is_none()) {
+    let shared = scene.simulator_settings(grid.dims(), None);
+    if let Some(shared) = shared.as_ref().filter(|s| s.load_case.is_none()) {
         std::fs::create_dir_all(dir.join("voxcraft"))?;
         for (name, text) in [
             (
                 "voxcraft/base.vxa",
-                write_voxcraft_base(palette, voxel_size, settings),
+                write_voxcraft_base(palette, voxel_size, shared),
             ),
             ("voxcraft/design.vxd", write_vxd(grid)),
         ] {

@@ -17,8 +17,8 @@
 use std::fmt::Write;
 
 use super::vxa::{
-    READER_MAX_DT_FRACTION, bond_damping_z, edge_stroke, settle_and_stop, write_lattice,
-    write_palette, write_structure,
+    READER_MAX_DT_FRACTION, bond_damping_z, edge_stroke, per_voxel_layers,
+    whole_period_settle_and_stop, write_lattice, write_palette, write_structure,
 };
 use crate::material::Palette;
 use crate::task::SimulatorSettings;
@@ -37,7 +37,7 @@ pub fn write_voxcraft_base(
 ) -> String {
     let scene = &settings.scene;
     let d = &scene.damping;
-    let (settle, stop) = settle_and_stop(settings);
+    let (settle, stop) = whole_period_settle_and_stop(settings);
     let (temp_enabled, period, stroke) = match &scene.actuation {
         Some(a) => (1, a.period, edge_stroke(a.amplitude_volume)),
         None => (0, 1.0, 0.0),
@@ -86,20 +86,12 @@ pub fn write_voxcraft_base(
 /// reads uninitialised memory (found with its parser built for the CPU, docs/exports.md).
 pub fn write_vxd(grid: &VoxelGrid) -> String {
     let d = grid.dims();
-    let per_layer = |values_per_voxel: usize| {
-        let layer = vec!["0"; d.nx * d.ny * values_per_voxel].join(",");
-        let mut block = String::new();
-        for _ in 0..d.nz {
-            let _ = write!(block, "<Layer><![CDATA[{layer}]]></Layer>");
-        }
-        block
-    };
-    let blocks = format!(
-        "<PhaseOffset>{}</PhaseOffset><BaseCiliaForce>{}</BaseCiliaForce><ShiftCiliaForce>{}</ShiftCiliaForce>",
-        per_layer(1),
-        per_layer(3),
-        per_layer(3)
-    );
+    let blocks = [
+        per_voxel_layers("PhaseOffset", d, &[0.0]),
+        per_voxel_layers("BaseCiliaForce", d, &[0.0; 3]),
+        per_voxel_layers("ShiftCiliaForce", d, &[0.0; 3]),
+    ]
+    .concat();
     let mut x = String::new();
     let w = &mut x;
     let _ = writeln!(w, r#"<?xml version="1.0" encoding="ISO-8859-1"?>"#);

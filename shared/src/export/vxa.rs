@@ -7,9 +7,9 @@
 //! edge of s(1 + CTE·ΔT·sin(2πt/T)) with ΔT = `TempAmp` − `TempBase` (so both are written, 1 and
 //! 0, with the newer `TempAmplitude` = 1 beside them); it lets no voxel grow past its rest size
 //! unless `GrowthAmplitude` allows it; its only settle is `InitCmTime`, before which nothing
-//! actuates and from which travel is measured, with the sine's phase counted from t = 0; and its
-//! bond damping ratio is ours scaled by 2/√14 (its ratio refers to one bond, ours to the lattice's
-//! top mode).
+//! actuates and from which travel is measured, with the sine's phase counted from t = 0 (so every
+//! voxel gets the `PhaseOffset` that puts our phase at the settle's end); and its bond damping
+//! ratio is ours scaled by 2/√14 (its ratio refers to one bond, ours to the lattice's top mode).
 
 use std::fmt::Write;
 
@@ -62,7 +62,12 @@ pub fn write_vxa(design: &VxaDesign, settings: Option<&SimulatorSettings>) -> St
         .and_then(|s| s.scene.actuation.as_ref())
         .map_or(0.0, |a| edge_stroke(a.amplitude_volume));
     write_palette(w, &design.palette, stroke, "");
-    write_structure(w, &design.grid, "", "");
+    let phases = settings
+        .and_then(reader_phase_offset)
+        .map_or(String::new(), |phase| {
+            per_voxel_layers("PhaseOffset", design.grid.dims(), &[phase])
+        });
+    write_structure(w, &design.grid, "", &phases);
     let _ = writeln!(w, "</VXC>");
     let _ = writeln!(w, "</VXA>");
     x
@@ -143,10 +148,50 @@ pub fn edge_stroke(amplitude_volume: f64) -> f64 {
 /// out, makes a resting body drift (5.6 mm in 0.7 s measured); 0.9 is its own default.
 pub(super) const READER_MAX_DT_FRACTION: f64 = 0.9;
 
-/// When actuation starts and when the run stops, s, for readers whose sine's phase runs from
-/// t = 0: the settle is rounded up to a whole period, so the first measured cycle starts at phase
-/// 0 as ours does, and the stop is the task's cycles after it.
-pub(super) fn settle_and_stop(settings: &SimulatorSettings) -> (f64, f64) {
+/// `<name>` holding one `<Layer>` per z of `values` for every cell (x fastest, then y), the
+/// layout these readers use for per-voxel arrays (they read the entries of filled cells only).
+pub(super) fn per_voxel_layers(name: &str, dims: GridDims, values: &[f64]) -> String {
+    let cell = values
+        .iter()
+        .map(f64::to_string)
+        .collect::<Vec<_>>()
+        .join(",");
+    let layer = vec![cell.as_str(); dims.nx * dims.ny].join(",");
+    let mut block = format!("<{name}>");
+    for _ in 0..dims.nz {
+        let _ = write!(block, "<Layer><![CDATA[{layer}]]></Layer>");
+    }
+    let _ = write!(block, "</{name}>");
+    block
+}
+
+/// The reader's phase offset, in periods, that makes its sin(2π(t/T + φ)) our
+/// sin(2π(t − t_settle)/T + phase) once actuation starts at `InitCmTime` = t_settle; in [0, 1).
+/// `None` without actuation or for a load case.
+pub(super) fn reader_phase_offset(settings: &SimulatorSettings) -> Option<f64> {
+    let a = settings.scene.actuation.as_ref()?;
+    if settings.load_case.is_some() {
+        return None;
+    }
+    Some((a.phase / std::f64::consts::TAU - settings.settle_time / a.period).rem_euclid(1.0))
+}
+
+/// When the reader starts actuating and measuring, and when it stops, s: the settle exactly as
+/// written (the phase offset carries the sine's start), then the task's cycles.
+fn settle_and_stop(settings: &SimulatorSettings) -> (f64, f64) {
+    match &settings.scene.actuation {
+        Some(a) => (
+            settings.settle_time,
+            settings.settle_time + f64::from(settings.cycles) * a.period,
+        ),
+        None => (settings.settle_time, settings.settle_time),
+    }
+}
+
+/// The same for readers given no per-design phase (voxcraft-sim's base, shared by every design):
+/// the settle is rounded up to a whole period, so the first measured cycle starts at phase 0 as
+/// ours does, and the stop is the task's cycles after it.
+pub(super) fn whole_period_settle_and_stop(settings: &SimulatorSettings) -> (f64, f64) {
     match &settings.scene.actuation {
         Some(a) => {
             let settle = (settings.settle_time / a.period).ceil() * a.period;
@@ -199,11 +244,20 @@ fn write_environment(w: &mut String, settings: &SimulatorSettings, ny: usize) {
         Some(a) => (1, a.period, 2.0 * edge_stroke(a.amplitude_volume)),
         None => (0, 1.0, 0.0),
     };
+    // A robot's centre-of-mass trace in the reader's result file, sampled as our trajectory.csv is
+    // (20 a period): its own result is an unsigned distance, the trace gives the travel's sign.
+    let traces = match (&scene.actuation, &settings.load_case) {
+        (Some(a), None) => format!(
+            "<SaveTraces>1</SaveTraces><TimeBetweenTraces>{}</TimeBetweenTraces>",
+            a.period / 20.0
+        ),
+        _ => String::new(),
+    };
     let _ = write!(w, "<Environment>");
     write_boundary_conditions(w, settings.load_case.as_ref(), ny);
     let _ = writeln!(
         w,
-        "<Gravity><GravEnabled>{}</GravEnabled><GravAcc>{}</GravAcc><FloorEnabled>{}</FloorEnabled></Gravity><Thermal><TempEnabled>{temp_enabled}</TempEnabled><TempAmp>1</TempAmp><TempBase>0</TempBase><TempAmplitude>1</TempAmplitude><VaryTempEnabled>{temp_enabled}</VaryTempEnabled><TempPeriod>{period}</TempPeriod></Thermal><GrowthAmplitude>{growth}</GrowthAmplitude></Environment>",
+        "<Gravity><GravEnabled>{}</GravEnabled><GravAcc>{}</GravAcc><FloorEnabled>{}</FloorEnabled></Gravity><Thermal><TempEnabled>{temp_enabled}</TempEnabled><TempAmp>1</TempAmp><TempBase>0</TempBase><TempAmplitude>1</TempAmplitude><VaryTempEnabled>{temp_enabled}</VaryTempEnabled><TempPeriod>{period}</TempPeriod></Thermal><GrowthAmplitude>{growth}</GrowthAmplitude>{traces}</Environment>",
         u8::from(scene.gravity > 0.0),
         -scene.gravity,
         u8::from(scene.floor.is_some()),

@@ -52,7 +52,8 @@ pub struct Artefact {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulatorSettings {
     pub scene: DynamicScene,
-    /// The longest the body may settle under gravity before actuation starts, s.
+    /// How long the body settles under gravity before actuation starts, s: the design's measured
+    /// settle when the settings are a design's, else the longest the task allows.
     pub settle_time: f64,
     /// Actuation cycles measured after settling.
     pub cycles: u32,
@@ -137,9 +138,14 @@ pub trait Task {
         dims: GridDims,
         metrics: &Self::Metrics,
     ) -> std::io::Result<Vec<Artefact>>;
-    /// How a dynamic simulator runs the design as this task means it (written into VXA
-    /// exports), or `None` for a static task.
-    fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings>;
+    /// How another simulator runs a design at `dims` as this task means it (written into VXA
+    /// exports); with the design's `metrics`, settings that depend on the design (a robot's
+    /// measured settle) are the design's own, without them the task's bounds.
+    fn simulator_settings(
+        &self,
+        dims: GridDims,
+        metrics: Option<&Self::Metrics>,
+    ) -> Option<SimulatorSettings>;
 }
 
 /// An outcome with a task's own metrics.
@@ -338,9 +344,16 @@ macro_rules! tasks {
                 }
             }
 
-            /// How a dynamic simulator runs a dynamic task's design at `dims` (for VXA exports).
-            pub fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
-                match self { $(Scene::$variant(s) => s.simulator_settings(dims)),+ }
+            /// How another simulator runs a design at `dims` (for VXA exports), with the
+            /// design's own settings where its outcome `of` is given (see
+            /// [`Task::simulator_settings`]).
+            pub fn simulator_settings(&self, dims: GridDims, of: Option<&Outcome>) -> Option<SimulatorSettings> {
+                match self {
+                    $(Scene::$variant(s) => {
+                        let m = match of.and_then(Outcome::metrics) { Some(Metrics::$variant(m)) => Some(m), _ => None };
+                        s.simulator_settings(dims, m)
+                    }),+
+                }
             }
         }
     };

@@ -159,8 +159,12 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                 .validate(scene.limits(), scene.palette().len())
                 .context("the genome does not fit the scene")?;
             let grid = scene.design(&genome, dims);
-            let mut files = amorph::export::write_fabrication_files(&out, &grid, &scene)
-                .with_context(|| format!("writing into {}", out.display()))?;
+            // The task's own pictures (a beam's profile, a robot's walk) and a robot's VXA (its
+            // measured settle) need its evaluation.
+            let outcome = scene.evaluate(&genome, dims);
+            let mut files =
+                amorph::export::write_fabrication_files(&out, &grid, &scene, Some(&outcome))
+                    .with_context(|| format!("writing into {}", out.display()))?;
             if let Some(samples) = smooth {
                 files.extend(
                     amorph::export::write_smooth_surfaces(&out, &genome, &scene, dims, samples)
@@ -182,8 +186,6 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
                         })?,
                 );
             }
-            // The task's own pictures (a beam's profile, a robot's walk) need its evaluation.
-            let outcome = scene.evaluate(&genome, dims);
             let artefacts = scene
                 .write_artefacts(&out, &genome, dims, &outcome)
                 .with_context(|| format!("writing the task's pictures into {}", out.display()))?;

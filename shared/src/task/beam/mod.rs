@@ -117,7 +117,11 @@ impl Task for BeamScene {
 
     /// The cantilever in free space, no gravity, the link damping of the dynamics' default, with
     /// the tip load; a reader relaxes it to rest (VXA exports, docs/exports.md).
-    fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
+    fn simulator_settings(
+        &self,
+        dims: GridDims,
+        _metrics: Option<&BeamMetrics>,
+    ) -> Option<SimulatorSettings> {
         let voxel_size = self.length / dims.ny as f64;
         let stiffest = self
             .palette

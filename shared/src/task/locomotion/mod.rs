@@ -141,10 +141,14 @@ impl Task for LocomotionScene {
         report::write_pictures(self, dir, genome, dims)
     }
 
-    fn simulator_settings(&self, dims: GridDims) -> Option<SimulatorSettings> {
+    fn simulator_settings(
+        &self,
+        dims: GridDims,
+        metrics: Option<&LocomotionMetrics>,
+    ) -> Option<SimulatorSettings> {
         Some(SimulatorSettings {
             scene: self.dynamics_at(dims),
-            settle_time: self.settle.max_time,
+            settle_time: metrics.map_or(self.settle.max_time, |m| m.settle_time),
             cycles: self.actuation_cycles,
             load_case: None,
         })

@@ -112,7 +112,11 @@ impl Task for StiffnessScene {
         Ok(Vec::new())
     }
 
-    fn simulator_settings(&self, _dims: GridDims) -> Option<SimulatorSettings> {
+    fn simulator_settings(
+        &self,
+        _dims: GridDims,
+        _metrics: Option<&Self::Metrics>,
+    ) -> Option<SimulatorSettings> {
         None
     }
 }

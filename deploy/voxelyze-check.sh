@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Runs robots' exported design.vxa through another Voxelyze build and prints, per design, our
+# centre-of-mass travel beside the reader's (issue 15; docs/exports.md "What Voxelyze does with our
+# VXA"). The reader is not part of this repository: build it from its public sources as the docs
+# say and pass its `voxelyze` binary.
+#
+#   deploy/voxelyze-check.sh VOXELYZE CONFIG RESOLUTION GENOME.json...
+#
+# CONFIG is a run's config.toml as the run wrote it (results/<run>/config.toml: every key,
+# [scene.dynamics] included). For each genome: `worker evaluate` at the scene's own time step (the
+# search's figure) and at the step the exported file asks the reader for (its DtFrac, at most 0.9:
+# the reader's floor drifts at 1.0), `worker export` (the files as a user gets them, unedited),
+# then `voxelyze -f design.vxa` in the export folder; the reader's travel is read from the
+# centre-of-mass trace in its result file (its own distance is unsigned). Prints a Markdown table
+# row per design.
+set -euo pipefail
+if [ $# -lt 4 ]; then
+  sed -n '2,15p' "$0" >&2
+  exit 2
+fi
+reader="$(realpath "$1")"; scene="$(realpath "$2")"; resolution="$3"; shift 3
+grep -q '^dt_fraction = ' "$scene" || {
+  echo "voxelyze-check: $scene has no dt_fraction line; give a run's own config.toml" >&2
+  exit 2
+}
+root="$(cd "$(dirname "$0")/.." && pwd)"
+worker="${WORKER:-$root/target/release/worker}"
+[ -x "$worker" ] || { echo "voxelyze-check: no worker at $worker (cargo build --release, or set WORKER)" >&2; exit 2; }
+[ -x "$reader" ] || { echo "voxelyze-check: $reader is not an executable" >&2; exit 2; }
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+echo "| design | voxels | settle | ours: travel x (fitness), y | ours at the file's step: x, y | the reader: x, y | reader / ours at the file's step (x) |"
+echo "|---|---|---|---|---|---|---|"
+for genome in "$@"; do
+  name="$(basename "$genome" .json)"
+  dir="$out/$name"
+  mkdir -p "$dir"
+  "$worker" evaluate --genome "$genome" --scene "$scene" --resolution "$resolution" > "$dir/ours.json"
+  "$worker" export --genome "$genome" --scene "$scene" --resolution "$resolution" --out "$dir" > /dev/null
+  step="$(grep -o '<DtFrac>[^<]*' "$dir/design.vxa" | cut -d'>' -f2)"
+  sed "s/^dt_fraction = .*/dt_fraction = $step/" "$scene" > "$dir/at-file-step.toml"
+  "$worker" evaluate --genome "$genome" --scene "$dir/at-file-step.toml" --resolution "$resolution" > "$dir/ours-at-file-step.json"
+  # The reader's exit status is 1 even when it ran to the end; its result file is the sign.
+  (cd "$dir" && "$reader" -f design.vxa > reader.log 2>&1) || true
+  [ -s "$dir/fitness.xml" ] || {
+    echo "voxelyze-check: the reader wrote no result for $genome:" >&2
+    tail -5 "$dir/reader.log" >&2
+    exit 1
+  }
+  python3 - "$dir/ours.json" "$dir/ours-at-file-step.json" "$dir/fitness.xml" "$name" <<'PY'
+import json, sys, xml.etree.ElementTree as ET
+metrics = lambda f: json.load(open(f))["evaluated"]["metrics"]["locomotion"]
+ours, same_step = metrics(sys.argv[1]), metrics(sys.argv[2])
+steps = ET.parse(sys.argv[3]).getroot().findall("./CMTrace/TraceStep")
+if len(steps) < 2:
+    sys.exit(f"voxelyze-check: {sys.argv[3]} holds no centre-of-mass trace")
+first, last = steps[0], steps[-1]
+dx = (float(last.find("TraceX").text) - float(first.find("TraceX").text)) * 1e3
+dy = (float(last.find("TraceY").text) - float(first.find("TraceY").text)) * 1e3
+x, fit, y = ours["displacement"] * 1e3, ours["gait_displacement"] * 1e3, ours["lateral"] * 1e3
+x9, y9 = same_step["displacement"] * 1e3, same_step["lateral"] * 1e3
+print(f"| {sys.argv[4]} | {ours['voxels']} | {ours['settle_time']:.3f} s | {x:+.2f} mm ({fit:.2f}), {y:+.2f} mm "
+      f"| {x9:+.2f} mm, {y9:+.2f} mm | {dx:+.2f} mm, {dy:+.2f} mm | {dx / x9:.2f} |")
+PY
+done
