@@ -323,6 +323,16 @@ impl Simulation {
         }
     }
 
+    /// How far above the floor an actuated voxel's centre is when it starts to touch: half its
+    /// rest size, or half its actuated size (`actuation_factor` λ) with `Floor::actuated_contact`.
+    fn actuated_floor_reach(&self, actuation_factor: f64) -> f64 {
+        let half = 0.5 * self.scene.voxel_size;
+        match &self.scene.floor {
+            Some(f) if f.actuated_contact => half * actuation_factor,
+            _ => half,
+        }
+    }
+
     /// Advances one time step. On divergence the state is left as it was found diverged and
     /// every further call returns the same outcome.
     pub fn step(&mut self) -> std::result::Result<(), Divergence> {
@@ -367,16 +377,12 @@ impl Simulation {
                     .collisions
                     .pass(&mut self.voxels, self.scene.voxel_size),
                 Pass::Floor => {
-                    let half = 0.5 * self.scene.voxel_size;
-                    let actuated_half = match &self.scene.floor {
-                        Some(f) if f.actuated_contact => half * link_step.actuation_factor,
-                        _ => half,
-                    };
+                    let actuated_reach = self.actuated_floor_reach(link_step.actuation_factor);
                     floor_pass(
                         &mut self.voxels,
                         &mut self.floor,
-                        half,
-                        actuated_half,
+                        0.5 * self.scene.voxel_size,
+                        actuated_reach,
                         self.dt,
                     )
                 }
@@ -504,6 +510,11 @@ impl Simulation {
     pub fn energy(&self) -> Energy {
         let v = &self.voxels;
         let s = self.scene.voxel_size;
+        let step = LinkStep {
+            voxel_size: s,
+            actuation_factor: self.actuation_factor(),
+        };
+        let actuated_reach = self.actuated_floor_reach(step.actuation_factor);
         let mut kinetic = 0.0;
         let mut gravitational = 0.0;
         let mut contact = 0.0;
@@ -515,14 +526,8 @@ impl Simulation {
                 gravitational -= f.dot(v.position[i]);
             }
             if !self.floor.stiffness.is_empty() {
-                let reach = if v.actuated[i]
-                    && self
-                        .scene
-                        .floor
-                        .as_ref()
-                        .is_some_and(|f| f.actuated_contact)
-                {
-                    0.5 * s * self.actuation_factor()
+                let reach = if v.actuated[i] {
+                    actuated_reach
                 } else {
                     0.5 * s
                 };
@@ -530,10 +535,6 @@ impl Simulation {
                 contact += 0.5 * self.floor.stiffness[i] * pen * pen;
             }
         }
-        let step = LinkStep {
-            voxel_size: s,
-            actuation_factor: self.actuation_factor(),
-        };
         let mut elastic = link_energy(&self.links, v, step);
         if self.poisson.is_active() {
             elastic += self.poisson.energy(&self.links, v, step);
