@@ -16,11 +16,15 @@ use amorph_coordinator::store::RunStore;
 use amorph_coordinator::{LocalEvaluator, RunConfig, RunContext, RunSummary, run};
 use amorph_worker::{ClientError, WorkerOptions, WorkerSummary, run_worker};
 
-/// A fresh, empty folder for one test's results, unique to this process.
+/// A fresh, empty folder for one test's results, unique to this call: the tests of one binary
+/// run in parallel threads, and two of them asking for the same name must not delete each
+/// other's run store mid-run.
 pub fn scratch_dir(test: &str) -> PathBuf {
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir()
         .join(format!("amorph-tests-{}", std::process::id()))
-        .join(test);
+        .join(format!("{test}-{call}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir

@@ -15,11 +15,17 @@ use tonic::Code;
 const EVALUATIONS: u64 = 240;
 const SEED: u64 = 7;
 
+/// The in-process run every cluster run must match, computed once per test process.
 fn reference() -> String {
-    fingerprint(&run_locally(
-        &small_beam_config(&scratch_dir("cluster-reference"), EVALUATIONS, SEED),
-        2,
-    ))
+    static REFERENCE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    REFERENCE
+        .get_or_init(|| {
+            fingerprint(&run_locally(
+                &small_beam_config(&scratch_dir("cluster-reference"), EVALUATIONS, SEED),
+                2,
+            ))
+        })
+        .clone()
 }
 
 #[test]
