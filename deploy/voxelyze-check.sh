@@ -11,8 +11,10 @@
 # search's figure) and at the step the exported file asks the reader for (its DtFrac, at most 0.9:
 # the reader's floor drifts at 1.0), `worker export` (the files as a user gets them, unedited),
 # then `voxelyze -f design.vxa` in the export folder; the reader's travel is read from the
-# centre-of-mass trace in its result file (its own distance is unsigned). Prints a Markdown table
-# row per design.
+# centre-of-mass trace in its result file (its own distance is unsigned). Ours is also evaluated at
+# the file's step with the reader's contact laws ([scene.dynamics.floor] actuated_contact = true,
+# friction = "voxcad"), which separates what the file says from how the two simulators' floors
+# differ. Prints a Markdown table row per design.
 set -euo pipefail
 if [ $# -lt 4 ]; then
   sed -n '2,15p' "$0" >&2
@@ -29,8 +31,8 @@ worker="${WORKER:-$root/target/release/worker}"
 [ -x "$reader" ] || { echo "voxelyze-check: $reader is not an executable" >&2; exit 2; }
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
-echo "| design | voxels | settle | ours: travel x (fitness), y | ours at the file's step: x, y | the reader: x, y | reader / ours at the file's step (x) |"
-echo "|---|---|---|---|---|---|---|"
+echo "| design | voxels | settle | ours: travel x (fitness), y | ours at the file's step: x, y | the reader: x, y | reader / ours at the file's step (x) | ours at the file's step with the reader's contact laws: x, y | reader / that (x) |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for genome in "$@"; do
   name="$(basename "$genome" .json)"
   dir="$out/$name"
@@ -40,6 +42,13 @@ for genome in "$@"; do
   step="$(grep -o '<DtFrac>[^<]*' "$dir/design.vxa" | cut -d'>' -f2)"
   sed "s/^dt_fraction = .*/dt_fraction = $step/" "$scene" > "$dir/at-file-step.toml"
   "$worker" evaluate --genome "$genome" --scene "$dir/at-file-step.toml" --resolution "$resolution" > "$dir/ours-at-file-step.json"
+  grep -Ev '^(actuated_contact|friction) = ' "$dir/at-file-step.toml" |
+    sed 's/^\[scene\.dynamics\.floor\]$/&\nactuated_contact = true\nfriction = "voxcad"/' > "$dir/reader-laws.toml"
+  grep -q '^friction = "voxcad"' "$dir/reader-laws.toml" || {
+    echo "voxelyze-check: $scene has no [scene.dynamics.floor] table" >&2
+    exit 2
+  }
+  "$worker" evaluate --genome "$genome" --scene "$dir/reader-laws.toml" --resolution "$resolution" > "$dir/ours-reader-laws.json"
   # The reader's exit status is 1 even when it ran to the end; its result file is the sign.
   (cd "$dir" && "$reader" -f design.vxa > reader.log 2>&1) || true
   [ -s "$dir/fitness.xml" ] || {
@@ -47,10 +56,10 @@ for genome in "$@"; do
     tail -5 "$dir/reader.log" >&2
     exit 1
   }
-  python3 - "$dir/ours.json" "$dir/ours-at-file-step.json" "$dir/fitness.xml" "$name" <<'PY'
+  python3 - "$dir/ours.json" "$dir/ours-at-file-step.json" "$dir/fitness.xml" "$name" "$dir/ours-reader-laws.json" <<'PY'
 import json, sys, xml.etree.ElementTree as ET
 metrics = lambda f: json.load(open(f))["evaluated"]["metrics"]["locomotion"]
-ours, same_step = metrics(sys.argv[1]), metrics(sys.argv[2])
+ours, same_step, laws = metrics(sys.argv[1]), metrics(sys.argv[2]), metrics(sys.argv[5])
 steps = ET.parse(sys.argv[3]).getroot().findall("./CMTrace/TraceStep")
 if len(steps) < 2:
     sys.exit(f"voxelyze-check: {sys.argv[3]} holds no centre-of-mass trace")
@@ -59,7 +68,9 @@ dx = (float(last.find("TraceX").text) - float(first.find("TraceX").text)) * 1e3
 dy = (float(last.find("TraceY").text) - float(first.find("TraceY").text)) * 1e3
 x, fit, y = ours["displacement"] * 1e3, ours["gait_displacement"] * 1e3, ours["lateral"] * 1e3
 x9, y9 = same_step["displacement"] * 1e3, same_step["lateral"] * 1e3
+xl, yl = laws["displacement"] * 1e3, laws["lateral"] * 1e3
 print(f"| {sys.argv[4]} | {ours['voxels']} | {ours['settle_time']:.3f} s | {x:+.2f} mm ({fit:.2f}), {y:+.2f} mm "
-      f"| {x9:+.2f} mm, {y9:+.2f} mm | {dx:+.2f} mm, {dy:+.2f} mm | {dx / x9:.2f} |")
+      f"| {x9:+.2f} mm, {y9:+.2f} mm | {dx:+.2f} mm, {dy:+.2f} mm | {dx / x9:.2f} "
+      f"| {xl:+.2f} mm, {yl:+.2f} mm | {dx / xl:.2f} |")
 PY
 done

@@ -2,7 +2,8 @@
 //! volume, and divergence as a typed outcome.
 
 use amorph::dynamics::{
-    Actuation, DampingParams, DivergenceReason, DynamicScene, Floor, Simulation, foam_palette,
+    Actuation, DampingParams, DivergenceReason, DynamicScene, Floor, FrictionLaw, Simulation,
+    foam_palette,
 };
 use amorph::material::{Material, MaterialId, Palette};
 use amorph::task::locomotion::{LocomotionProtocol, LocomotionStatus, simulate_locomotion};
@@ -10,7 +11,11 @@ use amorph::voxel::{GridDims, VoxelGrid};
 
 const G: f64 = 9.81;
 
-fn block_on_incline(incline_deg: f64) -> Simulation {
+/// Both friction laws must give the incline's answers: they differ only in when a voxel switches
+/// between sticking and sliding, not in what sticking and sliding are.
+const LAWS: [FrictionLaw; 2] = [FrictionLaw::Sticking, FrictionLaw::Voxcad];
+
+fn block_on_incline(incline_deg: f64, friction: FrictionLaw) -> Simulation {
     // μs = 1.0 (friction angle 45°), μk = 0.3.
     let mut rubber = Material::new("rubber", 1.0e6, 0.35);
     rubber.static_friction = 1.0;
@@ -20,6 +25,7 @@ fn block_on_incline(incline_deg: f64) -> Simulation {
         voxel_size: 0.01,
         floor: Some(Floor {
             incline: incline_deg.to_radians(),
+            friction,
             ..Floor::default()
         }),
         ..DynamicScene::default()
@@ -34,43 +40,47 @@ fn block_holds_below_the_friction_angle() {
     // instead would drop the block onto it: for the first ~1 ms its contact force is still
     // building, below what static friction needs against g sin θ, so it slips, and kinetic
     // friction (μk = 0.3 < tan 40°) can never stop it again: a dropped block really slides.
-    let mut sim = block_on_incline(0.0);
-    sim.run_for(0.05).unwrap();
-    let x0 = sim.centre_of_mass().x;
-    let (ramp, target) = (0.1, 40.0_f64.to_radians());
-    let steps = (ramp / sim.dt()).ceil() as u64;
-    for k in 1..=steps {
-        sim.set_incline(target * k as f64 / steps as f64).unwrap();
-        sim.step().unwrap();
+    for law in LAWS {
+        let mut sim = block_on_incline(0.0, law);
+        sim.run_for(0.05).unwrap();
+        let x0 = sim.centre_of_mass().x;
+        let (ramp, target) = (0.1, 40.0_f64.to_radians());
+        let steps = (ramp / sim.dt()).ceil() as u64;
+        for k in 1..=steps {
+            sim.set_incline(target * k as f64 / steps as f64).unwrap();
+            sim.step().unwrap();
+        }
+        sim.run_for(0.3).unwrap();
+        let slid = sim.centre_of_mass().x - x0;
+        eprintln!("{law:?}: slid {slid:.3e} m");
+        // Sticking voxels do not move tangentially at all; only the elastic shear of the block under
+        // its own weight remains, ρ g h²/G ~ 1e-6 m. Sliding for 0.3 s would cover ~0.1 m.
+        assert!(slid.abs() < 1e-5, "{law:?}: slid {slid} m");
     }
-    sim.run_for(0.3).unwrap();
-    let slid = sim.centre_of_mass().x - x0;
-    eprintln!("slid {slid:.3e} m");
-    // Sticking voxels do not move tangentially at all; only the elastic shear of the block under
-    // its own weight remains, ρ g h²/G ~ 1e-6 m. Sliding for 0.3 s would cover ~0.1 m.
-    assert!(slid.abs() < 1e-5, "slid {slid} m");
 }
 
 #[test]
 fn block_slides_above_the_friction_angle_with_the_kinetic_acceleration() {
     let theta: f64 = 50.0_f64.to_radians();
-    let mut sim = block_on_incline(50.0);
-    // Let the contact transient die out (a few contact periods, ~1 ms), then measure.
-    sim.run_for(0.02).unwrap();
-    let (t1, v1) = (sim.time(), sim.linear_momentum().x);
-    sim.run_for(0.2).unwrap();
-    let (t2, v2) = (sim.time(), sim.linear_momentum().x);
-    let mass = 8.0 * 1000.0 * 1e-6;
-    let measured = (v2 - v1) / mass / (t2 - t1);
-    let analytic = G * (theta.sin() - 0.3 * theta.cos());
-    let error = measured / analytic - 1.0;
-    eprintln!(
-        "incline acceleration {measured:.4} m/s², analytic {analytic:.4}, error {:.3} %",
-        100.0 * error
-    );
-    // Σ μk·N_i = μk·m g cos θ exactly once the normal forces are steady; 2 % is the bound
-    // and covers the residual contact ringing.
-    assert!(error.abs() < 0.02, "error {error}");
+    for law in LAWS {
+        let mut sim = block_on_incline(50.0, law);
+        // Let the contact transient die out (a few contact periods, ~1 ms), then measure.
+        sim.run_for(0.02).unwrap();
+        let (t1, v1) = (sim.time(), sim.linear_momentum().x);
+        sim.run_for(0.2).unwrap();
+        let (t2, v2) = (sim.time(), sim.linear_momentum().x);
+        let mass = 8.0 * 1000.0 * 1e-6;
+        let measured = (v2 - v1) / mass / (t2 - t1);
+        let analytic = G * (theta.sin() - 0.3 * theta.cos());
+        let error = measured / analytic - 1.0;
+        eprintln!(
+            "{law:?}: incline acceleration {measured:.4} m/s², analytic {analytic:.4}, error {:.3} %",
+            100.0 * error
+        );
+        // Σ μk·N_i = μk·m g cos θ exactly once the normal forces are steady; 2 % is the bound
+        // and covers the residual contact ringing.
+        assert!(error.abs() < 0.02, "{law:?}: error {error}");
+    }
 }
 
 fn volume_ratio(sim: &Simulation, initial: [f64; 3]) -> f64 {

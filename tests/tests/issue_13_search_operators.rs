@@ -49,15 +49,16 @@ target = "circular_arc"
     RunConfig::parse(&text, Path::new("operators.toml")).expect("valid test config")
 }
 
-/// One climb fed by every island (`shared`, with insertions): the nudges of three islands go to
-/// the one holding the run's best, and the run stays bit-identical whatever the thread count, its
-/// best never worse from one epoch to the next.
+/// One climb fed by every island (`shared`, with insertions, the improving nudges of each epoch
+/// combined into one child of the next): the nudges of three islands go to the one holding the
+/// run's best, and the run stays bit-identical whatever the thread count, its best never worse
+/// from one epoch to the next.
 #[test]
 fn a_shared_climb_is_bit_identical_on_1_and_3_threads_and_never_loses_the_best() {
     let dirs = [scratch_dir("shared-1"), scratch_dir("shared-3")];
     let configs = dirs
         .each_ref()
-        .map(|d| config(d, 7, "insertion = 0.5\nshared = true"));
+        .map(|d| config(d, 7, "insertion = 0.5\nshared = true\ncombine = true"));
     let one = run_locally(&configs[0], 1);
     let three = run_locally(&configs[1], 3);
     assert_eq!(one.evaluations, 240);

@@ -162,6 +162,9 @@ impl Search {
             .budget
             .evaluations
             .map_or(u64::MAX, |max| max.saturating_sub(self.evaluations));
+        // Computed before the breeding borrow: the batch below needs `self` whole.
+        let combine = (self.breeding.variation.local_search.combine)
+            .then_some(self.breeding.scene.limits().max_points);
         let breeding = &self.breeding;
         // One climb for the whole run: every island nudges the run's best, and the island that
         // holds it (the lowest index on a tie) judges the nudges.
@@ -199,7 +202,7 @@ impl Search {
                 if i != holder {
                     let (nudges, crossovers) = std::mem::take(island_children)
                         .into_iter()
-                        .partition(|c: &Child| c.nudge);
+                        .partition(|c: &Child| c.nudge && !c.combined);
                     *island_children = crossovers;
                     handed.extend(nudges);
                 }
@@ -230,7 +233,7 @@ impl Search {
             .iter_mut()
             .zip(children)
             .zip(outcomes)
-            .map(|((island, children), outcomes)| island.apply(children, outcomes))
+            .map(|((island, children), outcomes)| island.apply(children, outcomes, combine))
             .collect())
     }
 

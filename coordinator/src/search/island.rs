@@ -8,12 +8,14 @@ use amorph::genome::{
     CutPlane, DominantParent, Genome, MutationParams, crossover, mutate, random_genome,
 };
 use std::sync::Arc;
+use tracing::info;
 
 use amorph::task::{Outcome, Scene};
 use amorph::voxel::GridDims;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
+use super::combination::combine;
 use super::insertion::BoundarySite;
 use super::variation::Variation;
 use crate::ids::{IslandId, TaskId};
@@ -34,6 +36,9 @@ pub struct Child {
     pub dominant_parent: usize,
     /// A nudge of the island's best (local search) rather than a crossover child.
     pub nudge: bool,
+    /// The last epoch's improving nudges applied together (`local_search.combine`): judged by
+    /// this island against its best, never handed to another island, never itself combined.
+    pub combined: bool,
 }
 
 /// The design every island's nudges start from under `local_search.shared`: the run's best, its
@@ -67,6 +72,8 @@ pub struct Island {
     /// Crossover children of the last epoch that replaced their dominant parent, and how many
     /// there were: the evidence the step adapts to.
     last_success: (usize, usize),
+    /// The last epoch's improving nudges applied together, offered as the first nudge of the next.
+    combination: Option<Genome>,
 }
 
 impl Island {
@@ -97,6 +104,7 @@ impl Island {
             rng,
             step_scale: 1.0,
             last_success: (0, 0),
+            combination: None,
         }
     }
 
@@ -147,7 +155,18 @@ impl Island {
                 &own
             }
         };
-        for _ in 0..nudges {
+        // The combination judges against this island's own best, whatever `shared` says: the
+        // nudges it adds up were judged here, so this island holds their lineage.
+        let combination = self.combination.take().filter(|_| nudges > 0);
+        if let Some(genome) = combination.clone() {
+            children.push(Child {
+                genome,
+                dominant_parent: self.best_index(),
+                nudge: true,
+                combined: true,
+            });
+        }
+        for _ in usize::from(combination.is_some())..nudges {
             let mut genome = from.genome.clone();
             local.step_from_best(
                 &mut genome,
@@ -159,6 +178,7 @@ impl Island {
                 genome,
                 dominant_parent: from.slot,
                 nudge: true,
+                combined: false,
             });
         }
         children
@@ -203,6 +223,7 @@ impl Island {
             genome,
             dominant_parent,
             nudge: false,
+            combined: false,
         }
     }
 
@@ -226,13 +247,24 @@ impl Island {
     }
 
     /// Applies an epoch's evaluated children in order ([`Island::winners`]). Returns how many
-    /// replaced their dominant parent.
-    pub fn apply(&mut self, children: Vec<Child>, outcomes: Vec<(TaskId, Outcome)>) -> usize {
+    /// replaced their dominant parent. With `combine` (`local_search.combine`), first adds up the
+    /// nudges that beat the design they were nudged from, for the next epoch.
+    pub fn apply(
+        &mut self,
+        children: Vec<Child>,
+        outcomes: Vec<(TaskId, Outcome)>,
+        combine: Option<usize>,
+    ) -> usize {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
         let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
         let wins = self.winners(&children, &refs);
+        self.combination = combine
+            .and_then(|max_points| self.combine_improving_nudges(&children, &refs, max_points));
         let mut replaced = 0;
         for ((child, (task, outcome)), wins) in children.into_iter().zip(outcomes).zip(wins) {
+            if child.combined {
+                info!(island = %self.id, won = wins, "combined nudges judged");
+            }
             if !child.nudge {
                 self.last_success.1 += 1;
                 self.last_success.0 += usize::from(wins);
@@ -247,6 +279,45 @@ impl Island {
             }
         }
         replaced
+    }
+
+    /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
+    /// their dominant parent's slot, before any child of the epoch is applied), fittest first
+    /// (child order on a tie), added up by [`combine`].
+    fn combine_improving_nudges(
+        &self,
+        children: &[Child],
+        outcomes: &[&Outcome],
+        max_points: usize,
+    ) -> Option<Genome> {
+        let mut improving: Vec<(usize, &Child)> = children
+            .iter()
+            .enumerate()
+            .filter(|(k, c)| {
+                c.nudge
+                    && !c.combined
+                    && outcomes[*k].is_fitter_than(&self.population[c.dominant_parent].outcome)
+            })
+            .collect();
+        // Nudges of one epoch share one base (the island's best, or the run's under `shared`).
+        let slot = improving.first()?.1.dominant_parent;
+        improving.retain(|(_, c)| c.dominant_parent == slot);
+        let base = &self.population[slot].genome;
+        improving.sort_by(|(a, _), (b, _)| {
+            if outcomes[*a].is_fitter_than(outcomes[*b]) {
+                std::cmp::Ordering::Less
+            } else if outcomes[*b].is_fitter_than(outcomes[*a]) {
+                std::cmp::Ordering::Greater
+            } else {
+                std::cmp::Ordering::Equal
+            }
+        });
+        let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
+        let combined = combine(base, &genomes, max_points);
+        if combined.is_some() {
+            info!(island = %self.id, improving = genomes.len(), "improving nudges combined");
+        }
+        combined
     }
 
     /// Index of the fittest individual (the lowest index on a tie).
@@ -293,6 +364,7 @@ mod tests {
             genome: point_at(x),
             dominant_parent,
             nudge: false,
+            combined: false,
         }
     }
 
@@ -306,6 +378,7 @@ mod tests {
                 (TaskId(2), scored(-2.0)), // fitter than -3: replaces
                 (TaskId(3), scored(-4.0)), // fitter than slot 0, but slot 2 is its parent: stays
             ],
+            None,
         );
         assert_eq!(replaced, 1);
         let tasks: Vec<u64> = isl.population.iter().map(|i| i.task.0).collect();
@@ -319,12 +392,18 @@ mod tests {
         // (-4.5) beats the original parent but not the new occupant, so it stays out.
         let mut isl = island(0, &[0.1], &[-5.0]);
         let outcomes = vec![(TaskId(1), scored(-4.0)), (TaskId(2), scored(-4.5))];
-        assert_eq!(isl.apply(vec![child(0, 0.5), child(0, 0.6)], outcomes), 1);
+        assert_eq!(
+            isl.apply(vec![child(0, 0.5), child(0, 0.6)], outcomes, None),
+            1
+        );
         assert_eq!(isl.population[0].task, TaskId(1));
         // In the other order both replace, one after the other.
         let mut isl = island(0, &[0.1], &[-5.0]);
         let outcomes = vec![(TaskId(2), scored(-4.5)), (TaskId(1), scored(-4.0))];
-        assert_eq!(isl.apply(vec![child(0, 0.6), child(0, 0.5)], outcomes), 2);
+        assert_eq!(
+            isl.apply(vec![child(0, 0.6), child(0, 0.5)], outcomes, None),
+            2
+        );
         assert_eq!(isl.population[0].task, TaskId(1));
     }
 
@@ -335,6 +414,7 @@ mod tests {
         let replaced = isl.apply(
             vec![child(0, 0.9), child(1, 0.8)],
             vec![(TaskId(1), failed()), (TaskId(2), scored(-1e9))],
+            None,
         );
         assert_eq!(replaced, 1);
         assert_eq!(isl.population[0].task, TaskId(0));
@@ -367,6 +447,7 @@ mod tests {
                 step: 0.01,
                 insertion: 0.0,
                 shared: false,
+                combine: false,
             },
             ..Default::default()
         });
@@ -471,6 +552,64 @@ mod tests {
         }
     }
 
+    /// Two nudges that each beat the best (moving different points) come back together as the
+    /// first nudge of the next epoch, judged against the island's best; a third nudge that lost
+    /// is not in it, and without `combine` nothing is offered.
+    #[test]
+    fn improving_nudges_return_added_up_as_the_next_epochs_first_nudge() {
+        let mut isl = island(0, &[0.1, 0.2], &[-5.0, -1.0]);
+        let best = random_genome(isl.rng_mut(), 4, &GenomeLimits::default(), 2);
+        isl.population[1].genome = best.clone();
+        let nudged = |i: usize, dx: f64| {
+            let mut g = best.clone();
+            g.points[i].density += dx;
+            Child {
+                genome: g,
+                dominant_parent: 1,
+                nudge: true,
+                combined: false,
+            }
+        };
+        let epoch = || {
+            (
+                vec![nudged(0, 0.01), nudged(1, 0.02), nudged(2, 0.03)],
+                vec![
+                    (TaskId(1), scored(-0.8)), // beats -1: replaces the best
+                    (TaskId(2), scored(-0.9)), // beats -1, not -0.8: stays out, but improved
+                    (TaskId(3), scored(-1.5)), // worse than the best it came from
+                ],
+            )
+        };
+        let b = breeding(Variation {
+            local_search: LocalSearchParams {
+                fraction: 1.0,
+                combine: true,
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        let (children, outcomes) = epoch();
+        assert_eq!(isl.apply(children, outcomes, Some(64)), 1);
+        let next = isl.breed(3, &b, DIMS, None);
+        let first = &next[0];
+        assert!(first.nudge && first.combined);
+        assert_eq!(first.dominant_parent, 1);
+        let mut expected = best.clone();
+        expected.points[0].density += 0.01;
+        expected.points[1].density += 0.02;
+        assert_eq!(first.genome, expected);
+        assert!(next[1..].iter().all(|c| c.nudge && !c.combined));
+        // The combination is offered once: the epoch after has none unless nudges improve again.
+        let again = isl.breed(3, &b, DIMS, None);
+        assert!(again.iter().all(|c| !c.combined));
+
+        let mut isl = island(0, &[0.1, 0.2], &[-5.0, -1.0]);
+        isl.population[1].genome = best.clone();
+        let (children, outcomes) = epoch();
+        isl.apply(children, outcomes, None);
+        assert!(isl.breed(3, &b, DIMS, None).iter().all(|c| !c.combined));
+    }
+
     #[test]
     fn the_step_adapts_to_crossover_children_only() {
         use crate::search::variation::{StepAdaptation, StepRule};
@@ -492,12 +631,13 @@ mod tests {
                 (TaskId(2), scored(-9.0)),
                 (TaskId(3), scored(-0.5)),
             ],
+            None,
         );
         isl.breed(1, &b, DIMS, None);
         assert_eq!(isl.step_scale(), 1.2);
         // Then an epoch with only failures shrinks it back.
         let children = vec![child(0, 0.1)];
-        isl.apply(children, vec![(TaskId(4), failed())]);
+        isl.apply(children, vec![(TaskId(4), failed())], None);
         isl.breed(1, &b, DIMS, None);
         assert_eq!(isl.step_scale(), 1.0);
     }

@@ -1,6 +1,7 @@
 //! The evolutionary search: deterministic-crowding islands bred in epochs, migration between them,
 //! and the multi-resolution schedule.
 
+mod combination;
 mod diversity;
 #[cfg(test)]
 mod fixtures;

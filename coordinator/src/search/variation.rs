@@ -36,6 +36,11 @@ pub struct LocalSearchParams {
     /// them) instead of the island's own best: one climb fed by all islands rather than one short
     /// climb per island. Crossover children stay in their islands.
     pub shared: bool,
+    /// The nudges of an epoch that beat the design they were nudged from are applied together
+    /// (each moved point from the fittest nudge that moved it, inserted points appended) and
+    /// offered as the first nudge of the next epoch (`search::combination`): the climb can then
+    /// take several steps per epoch instead of one.
+    pub combine: bool,
 }
 
 impl Default for LocalSearchParams {
@@ -47,6 +52,7 @@ impl Default for LocalSearchParams {
             step: 0.02,
             insertion: 0.0,
             shared: false,
+            combine: false,
         }
     }
 }

@@ -22,6 +22,8 @@ mod state;
 
 pub use error::{DynamicsError, Result};
 pub use math::{Mat3, Quat, Vec3};
-pub use scene::{Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, foam_palette};
+pub use scene::{
+    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, FrictionLaw, foam_palette,
+};
 pub use simulation::{Divergence, DivergenceReason, Energy, Pass, Simulation};
 pub use state::TOP_EIGENVALUE;

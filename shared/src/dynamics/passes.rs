@@ -3,6 +3,7 @@
 //! over flat arrays; the scene decides once which of them exist.
 
 use super::math::{Quat, Vec3};
+use super::scene::FrictionLaw;
 use super::state::Voxels;
 
 /// Adds a constant per-voxel external force (N).
@@ -39,6 +40,7 @@ pub struct FloorContact {
     pub damping: Vec<f64>,
     /// Static friction state: true while the voxel sticks to the floor.
     pub sticking: Vec<bool>,
+    pub law: FrictionLaw,
 }
 
 /// Floor at z = 0 with penalty contact (a voxel touches when its centre is within half its size:
@@ -65,6 +67,10 @@ pub fn floor_pass(
             continue;
         }
         let v = voxels.velocity[i];
+        if contact.law == FrictionLaw::Voxcad {
+            voxcad_contact(voxels, contact, i, penetration, dt);
+            continue;
+        }
         // No adhesion: the floor only pushes.
         let normal = (contact.stiffness[i] * penetration - contact.damping[i] * v.z).max(0.0);
         let f = &mut voxels.force[i];
@@ -115,6 +121,42 @@ pub fn floor_pass(
             p.y = 0.0;
             contact.sticking[i] = true;
         }
+    }
+}
+
+/// One voxel's contact under [`FrictionLaw::Voxcad`] (the VoxCAD-era Voxelyze's rule, read from
+/// its public source and written here): friction from the elastic normal force, the damping
+/// force added to the normal without a floor at zero, static only from exactly zero velocity.
+fn voxcad_contact(
+    voxels: &mut Voxels,
+    contact: &mut FloorContact,
+    i: usize,
+    penetration: f64,
+    dt: f64,
+) {
+    let v = voxels.velocity[i];
+    let normal = contact.stiffness[i] * penetration;
+    let f = &mut voxels.force[i];
+    f.z += normal - contact.damping[i] * v.z;
+    let speed = (v.x * v.x + v.y * v.y).sqrt();
+    let pull = (f.x * f.x + f.y * f.y).sqrt();
+    let friction = voxels.kinetic_friction[i] * normal;
+    let stops = if speed == 0.0 {
+        pull < voxels.static_friction[i] * normal
+    } else if friction * dt < voxels.mass[i] * speed {
+        f.x -= friction * v.x / speed;
+        f.y -= friction * v.y / speed;
+        false
+    } else {
+        true
+    };
+    contact.sticking[i] = stops;
+    if stops {
+        f.x = 0.0;
+        f.y = 0.0;
+        let p = &mut voxels.momentum[i];
+        p.x = 0.0;
+        p.y = 0.0;
     }
 }
 
@@ -169,5 +211,71 @@ pub fn integrate_pass(voxels: &mut Voxels, dt: f64) -> IntegrationSummary {
     IntegrationSummary {
         max_speed2,
         checksum,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const M: f64 = 1e-3;
+    const K: f64 = 1e3;
+    const PEN: f64 = 1e-5;
+    const DT: f64 = 1e-4;
+
+    /// One voxel 10 µm into the floor (elastic normal force K·PEN = 0.01 N, no normal velocity),
+    /// μs = 1, μk = 0.5, moving at `speed` along +X and pulled along +X by `pull`.
+    fn one_voxel(speed: f64, pull: f64) -> (Voxels, FloorContact) {
+        let voxels = Voxels {
+            position: vec![Vec3::new(0.0, 0.0, 0.5e-3 - PEN)],
+            velocity: vec![Vec3::new(speed, 0.0, 0.0)],
+            momentum: vec![Vec3::new(M * speed, 0.0, 0.0)],
+            force: vec![Vec3::new(pull, 0.0, 0.0)],
+            mass: vec![M],
+            static_friction: vec![1.0],
+            kinetic_friction: vec![0.5],
+            actuated: vec![false],
+            ..Voxels::default()
+        };
+        let contact = FloorContact {
+            stiffness: vec![K],
+            damping: vec![0.0],
+            sticking: vec![false],
+            law: FrictionLaw::Voxcad,
+        };
+        (voxels, contact)
+    }
+
+    fn run(speed: f64, pull: f64) -> (Vec3, Vec3, bool) {
+        let (mut v, mut c) = one_voxel(speed, pull);
+        floor_pass(&mut v, &mut c, 0.5e-3, 0.5e-3, DT);
+        (v.force[0], v.momentum[0], c.sticking[0])
+    }
+
+    #[test]
+    fn voxcad_friction_holds_a_stopped_voxel_only_below_the_static_limit() {
+        // Normal force 0.01 N: static limit 0.01 N, kinetic 0.005 N.
+        let (f, p, stuck) = run(0.0, 0.009);
+        assert!(stuck && f.x == 0.0 && p.x == 0.0);
+        // Pulled past the limit, a stopped voxel gets no friction in that step.
+        let (f, _, stuck) = run(0.0, 0.011);
+        assert!(!stuck);
+        assert_eq!(f.x, 0.011);
+        assert!(
+            (f.z / (K * PEN) - 1.0).abs() < 1e-9,
+            "the elastic normal force: {f:?}"
+        );
+    }
+
+    #[test]
+    fn voxcad_friction_slows_a_slider_and_stops_it_whatever_pulls_it() {
+        // Friction removes μk·N·dt = 5e-7 N·s a step; 1 mm/s of a gram is 1e-6: it slides on.
+        let (f, _, stuck) = run(1e-3, 0.02);
+        assert!(!stuck);
+        assert!((f.x - (0.02 - 0.005)).abs() < 1e-15, "{f:?}");
+        // At 0.4 mm/s (4e-7 N·s) friction would stop it within the step: it is stopped, even
+        // pulled at twice the static limit.
+        let (f, p, stuck) = run(4e-4, 0.02);
+        assert!(stuck && f.x == 0.0 && p.x == 0.0);
     }
 }

@@ -80,6 +80,33 @@ pub struct Floor {
     /// to the same bytes.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub actuated_contact: bool,
+    /// The friction law at the floor. Default `sticking`, the law of every result before it; not
+    /// written when default, so earlier scenes encode to the same bytes.
+    #[serde(skip_serializing_if = "FrictionLaw::is_default")]
+    pub friction: FrictionLaw,
+}
+
+/// How a voxel on the floor changes between sticking and sliding (docs/dynamics.md, "Friction
+/// laws").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionLaw {
+    /// A voxel sticks while its tangential pull is within μs·N and starts sliding against kinetic
+    /// friction μk·N when it is not; a sliding voxel stops and sticks when friction would stop
+    /// it within a step and static friction can hold it. N includes the contact's damping.
+    #[default]
+    Sticking,
+    /// The VoxCAD-era Voxelyze's law, for comparing with that reader: N is the contact's elastic
+    /// force alone; a voxel is held only while its velocity is exactly zero and its pull below
+    /// μs·N (a stopped voxel pulled harder moves that step without friction); a sliding voxel that
+    /// friction would stop within a step is stopped, whatever pulls it.
+    Voxcad,
+}
+
+impl FrictionLaw {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 impl Default for Floor {
@@ -89,6 +116,7 @@ impl Default for Floor {
             incline: 0.0,
             downhill: 0.0,
             actuated_contact: false,
+            friction: FrictionLaw::Sticking,
         }
     }
 }

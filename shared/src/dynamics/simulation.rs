@@ -133,6 +133,7 @@ impl Simulation {
                 .map(|i| 2.0 * scene.damping.contact * (voxels.mass[i] * floor.stiffness[i]).sqrt())
                 .collect();
             floor.sticking = vec![false; n];
+            floor.law = f.friction;
         }
         let global_damping = global_damping_constants(&voxels, s, scene.damping.global);
         let k_max = links
