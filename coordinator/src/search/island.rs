@@ -158,7 +158,8 @@ impl Island {
         // The combination judges against this island's own best, whatever `shared` says: the
         // nudges it adds up were judged here, so this island holds their lineage.
         let combination = self.combination.take().filter(|_| nudges > 0);
-        if let Some(genome) = combination.clone() {
+        let offered = usize::from(combination.is_some());
+        if let Some(genome) = combination {
             children.push(Child {
                 genome,
                 dominant_parent: self.best_index(),
@@ -166,7 +167,7 @@ impl Island {
                 combined: true,
             });
         }
-        for _ in usize::from(combination.is_some())..nudges {
+        for _ in offered..nudges {
             let mut genome = from.genome.clone();
             local.step_from_best(
                 &mut genome,
@@ -303,15 +304,8 @@ impl Island {
         let slot = improving.first()?.1.dominant_parent;
         improving.retain(|(_, c)| c.dominant_parent == slot);
         let base = &self.population[slot].genome;
-        improving.sort_by(|(a, _), (b, _)| {
-            if outcomes[*a].is_fitter_than(outcomes[*b]) {
-                std::cmp::Ordering::Less
-            } else if outcomes[*b].is_fitter_than(outcomes[*a]) {
-                std::cmp::Ordering::Greater
-            } else {
-                std::cmp::Ordering::Equal
-            }
-        });
+        // A stable sort, so ties keep child order.
+        improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
         let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
         let combined = combine(base, &genomes, max_points);
         if combined.is_some() {

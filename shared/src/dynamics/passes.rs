@@ -40,6 +40,7 @@ pub struct FloorContact {
     pub damping: Vec<f64>,
     /// Static friction state: true while the voxel sticks to the floor.
     pub sticking: Vec<bool>,
+    /// The scene's friction law (`Floor::friction`).
     pub law: FrictionLaw,
 }
 
@@ -66,11 +67,11 @@ pub fn floor_pass(
             contact.sticking[i] = false;
             continue;
         }
-        let v = voxels.velocity[i];
         if contact.law == FrictionLaw::Voxcad {
             voxcad_contact(voxels, contact, i, penetration, dt);
             continue;
         }
+        let v = voxels.velocity[i];
         // No adhesion: the floor only pushes.
         let normal = (contact.stiffness[i] * penetration - contact.damping[i] * v.z).max(0.0);
         let f = &mut voxels.force[i];

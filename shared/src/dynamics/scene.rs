@@ -86,8 +86,8 @@ pub struct Floor {
     pub friction: FrictionLaw,
 }
 
-/// How a voxel on the floor changes between sticking and sliding (docs/dynamics.md, "Friction
-/// laws").
+/// How a voxel on the floor changes between sticking and sliding (docs/dynamics.md, "Model",
+/// the floor).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FrictionLaw {
