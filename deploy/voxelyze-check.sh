@@ -15,6 +15,11 @@
 # the file's step with the reader's contact laws ([scene.dynamics.floor] actuated_contact = true,
 # friction = "voxcad"), which separates what the file says from how the two simulators' floors
 # differ. Prints a Markdown table row per design.
+#
+# DTFRAC=<f> runs both programs at step fraction f instead of the file's (the file's <DtFrac> is
+# rewritten after export, ours is evaluated at dt_fraction = f): a walking gait is a chaotic contact
+# problem, so the comparison at several steps tells the programs' difference from each one's own
+# step sensitivity (docs/exports.md).
 set -euo pipefail
 if [ $# -lt 4 ]; then
   sed -n '2,15p' "$0" >&2
@@ -39,6 +44,9 @@ for genome in "$@"; do
   mkdir -p "$dir"
   "$worker" evaluate --genome "$genome" --scene "$scene" --resolution "$resolution" > "$dir/ours.json"
   "$worker" export --genome "$genome" --scene "$scene" --resolution "$resolution" --out "$dir" > /dev/null
+  if [ -n "${DTFRAC:-}" ]; then
+    sed -i "s|<DtFrac>[^<]*|<DtFrac>$DTFRAC|" "$dir/design.vxa"
+  fi
   step="$(grep -o '<DtFrac>[^<]*' "$dir/design.vxa" | cut -d'>' -f2)"
   sed "s/^dt_fraction = .*/dt_fraction = $step/" "$scene" > "$dir/at-file-step.toml"
   "$worker" evaluate --genome "$genome" --scene "$dir/at-file-step.toml" --resolution "$resolution" > "$dir/ours-at-file-step.json"
