@@ -17,6 +17,7 @@
 //! imbalance M_a + M_b + d × F_b; it is split between the ends so that every link conserves
 //! angular momentum exactly, as a rigid body needs.
 
+use super::lanes::{Arith, LANES, Lanes, Portable};
 use super::math::{Quat, Vec3};
 use super::state::{Links, Voxels};
 
@@ -29,123 +30,35 @@ pub struct LinkStep {
     pub actuation_factor: f64,
 }
 
-/// Links computed together, one per lane. The kernel is written lane-wise on `[f64; LANES]`
-/// arrays, which the compiler turns into SSE2 pairs or, under the AVX2 dispatch, 4-wide vectors.
-const LANES: usize = 4;
-
-/// One `f64` per lane.
-#[derive(Clone, Copy)]
-struct Lanes([f64; LANES]);
-
-impl Lanes {
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        Self([v; LANES])
-    }
-
-    #[inline(always)]
-    fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
-        Self(std::array::from_fn(f))
-    }
-
-    #[inline(always)]
-    fn zip(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
-        let mut r = self.0;
-        for (r, o) in r.iter_mut().zip(o.0) {
-            *r = f(*r, o);
-        }
-        Self(r)
-    }
-
-    #[inline(always)]
-    fn map(self, f: impl Fn(f64) -> f64) -> Self {
-        let mut r = self.0;
-        for r in &mut r {
-            *r = f(*r);
-        }
-        Self(r)
-    }
-
-    /// `src[k0..k0 + LANES]`, the last entry repeated past the end of `src`.
-    #[inline(always)]
-    fn load(src: &[f64], k0: usize) -> Self {
-        match src.get(k0..k0 + LANES) {
-            Some(s) => Self::from_fn(|j| s[j]),
-            None => Self::from_fn(|j| src[(k0 + j).min(src.len() - 1)]),
-        }
-    }
-}
-
-impl std::ops::Add for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        self.zip(o, |a, b| a + b)
-    }
-}
-impl std::ops::Sub for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        self.zip(o, |a, b| a - b)
-    }
-}
-impl std::ops::Mul for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        self.zip(o, |a, b| a * b)
-    }
-}
-impl std::ops::Mul<f64> for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: f64) -> Self {
-        self.map(|a| a * o)
-    }
-}
-impl std::ops::Div for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn div(self, o: Self) -> Self {
-        self.zip(o, |a, b| a / b)
-    }
-}
-impl std::ops::Neg for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        self.map(|a| -a)
-    }
-}
-
 /// A 3-vector per lane.
 #[derive(Clone, Copy)]
-struct V3 {
-    x: Lanes,
-    y: Lanes,
-    z: Lanes,
+struct V3<A: Arith> {
+    x: Lanes<A>,
+    y: Lanes<A>,
+    z: Lanes<A>,
 }
 
-impl V3 {
+impl<A: Arith> V3<A> {
     /// Lane `j` is `f(j)`.
     #[inline(always)]
-    fn gather(mut f: impl FnMut(usize) -> Vec3) -> Self {
+    fn gather(arith: A, mut f: impl FnMut(usize) -> Vec3) -> Self {
         let v: [Vec3; LANES] = std::array::from_fn(&mut f);
         Self {
-            x: Lanes::from_fn(|j| v[j].x),
-            y: Lanes::from_fn(|j| v[j].y),
-            z: Lanes::from_fn(|j| v[j].z),
+            x: Lanes::from_fn(arith, |j| v[j].x),
+            y: Lanes::from_fn(arith, |j| v[j].y),
+            z: Lanes::from_fn(arith, |j| v[j].z),
         }
     }
 
+    /// Every lane, as 3-vectors.
     #[inline(always)]
-    fn lane(&self, j: usize) -> Vec3 {
-        Vec3::new(self.x.0[j], self.y.0[j], self.z.0[j])
+    fn lanes(&self) -> [Vec3; LANES] {
+        let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
+        std::array::from_fn(|j| Vec3::new(x[j], y[j], z[j]))
     }
 
     #[inline(always)]
-    fn dot(self, o: Self) -> Lanes {
+    fn dot(self, o: Self) -> Lanes<A> {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
@@ -159,7 +72,7 @@ impl V3 {
     }
 
     #[inline(always)]
-    fn scale(self, s: Lanes) -> Self {
+    fn scale(self, s: Lanes<A>) -> Self {
         Self {
             x: self.x * s,
             y: self.y * s,
@@ -168,7 +81,7 @@ impl V3 {
     }
 }
 
-impl std::ops::Add for V3 {
+impl<A: Arith> std::ops::Add for V3<A> {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -179,7 +92,7 @@ impl std::ops::Add for V3 {
         }
     }
 }
-impl std::ops::Sub for V3 {
+impl<A: Arith> std::ops::Sub for V3<A> {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
@@ -193,21 +106,21 @@ impl std::ops::Sub for V3 {
 
 /// A rotation matrix per lane, by columns (see [`super::math::Mat3`]).
 #[derive(Clone, Copy)]
-struct M3 {
-    cx: V3,
-    cy: V3,
-    cz: V3,
+struct M3<A: Arith> {
+    cx: V3<A>,
+    cy: V3<A>,
+    cz: V3<A>,
 }
 
-impl M3 {
+impl<A: Arith> M3<A> {
     /// The rotation matrix of `q / |q|` given `s` = 2/|q|² (`q` as w, x, y, z).
     #[inline(always)]
-    fn from_quat(q: [Lanes; 4], s: Lanes) -> Self {
+    fn from_quat(q: [Lanes<A>; 4], s: Lanes<A>) -> Self {
         let [w, x, y, z] = q;
         let (xx, yy, zz) = (x * x, y * y, z * z);
         let (xy, xz, yz) = (x * y, x * z, y * z);
         let (wx, wy, wz) = (w * x, w * y, w * z);
-        let one = Lanes::splat(1.0);
+        let one = Lanes::splat(s.arith, 1.0);
         Self {
             cx: V3 {
                 x: one - s * (yy + zz),
@@ -228,12 +141,12 @@ impl M3 {
     }
 
     #[inline(always)]
-    fn apply(&self, v: V3) -> V3 {
+    fn apply(&self, v: V3<A>) -> V3<A> {
         self.cx.scale(v.x) + self.cy.scale(v.y) + self.cz.scale(v.z)
     }
 
     #[inline(always)]
-    fn apply_transpose(&self, v: V3) -> V3 {
+    fn apply_transpose(&self, v: V3<A>) -> V3<A> {
         V3 {
             x: self.cx.dot(v),
             y: self.cy.dot(v),
@@ -250,25 +163,28 @@ fn series_holds(t2: f64) -> bool {
 
 /// A quaternion per lane (w, x, y, z): lane `j` is `q[index(j)]`.
 #[inline(always)]
-fn gather_quat(q: &[Quat], index: impl Fn(usize) -> usize) -> [Lanes; 4] {
+fn gather_quat<A: Arith>(arith: A, q: &[Quat], index: impl Fn(usize) -> usize) -> [Lanes<A>; 4] {
     let v: [Quat; LANES] = std::array::from_fn(|j| q[index(j)]);
     [
-        Lanes::from_fn(|j| v[j].w),
-        Lanes::from_fn(|j| v[j].x),
-        Lanes::from_fn(|j| v[j].y),
-        Lanes::from_fn(|j| v[j].z),
+        Lanes::from_fn(arith, |j| v[j].w),
+        Lanes::from_fn(arith, |j| v[j].x),
+        Lanes::from_fn(arith, |j| v[j].y),
+        Lanes::from_fn(arith, |j| v[j].z),
     ]
 }
 
-/// Per lane, `a` where `axis` is `k` and `b` elsewhere (`axis` holds 0, 1 or 2 as `f64`).
+/// Per lane, `a` where the link's axis (0, 1 or 2 as `f64`) is `k`, and `b` elsewhere.
 #[inline(always)]
-fn on_axis(axis: Lanes, k: f64, a: Lanes, b: Lanes) -> Lanes {
-    Lanes::from_fn(|j| if axis.0[j] == k { a.0[j] } else { b.0[j] })
+fn on_axis<A: Arith>(axis: Lanes<A>, k: f64, a: Lanes<A>, b: Lanes<A>) -> Lanes<A> {
+    Lanes {
+        v: axis.arith.select_eq(axis.v, k, a.v, b.v),
+        arith: axis.arith,
+    }
 }
 
 /// The vector (a on the link axis, b across it) per lane.
 #[inline(always)]
-fn axial_split(axis: Lanes, a: Lanes, b: Lanes) -> V3 {
+fn axial_split<A: Arith>(axis: Lanes<A>, a: Lanes<A>, b: Lanes<A>) -> V3<A> {
     V3 {
         x: on_axis(axis, 0.0, a, b),
         y: on_axis(axis, 1.0, a, b),
@@ -280,11 +196,12 @@ fn axial_split(axis: Lanes, a: Lanes, b: Lanes) -> V3 {
 /// strain |δ|/L seen, for divergence detection. `DAMPED` and `ACTUATED` select the variant at
 /// compile time so a scene without link damping or actuation pays nothing for them.
 ///
-/// Links go through the kernel [`LANES`] at a time: their voxels' state is gathered into lane
-/// arrays, the kernel runs lane-wise, and the forces and moments are added to the voxels one link
-/// at a time in link order, so every voxel sums its contributions in the same order whatever the
-/// lane width. The kernel uses only IEEE additions, multiplications, divisions and square roots
-/// (no fused multiply-add), so the SSE2 and the AVX2 builds of it give the same bits.
+/// Links go through the kernel [`LANES`] at a time: their voxels' state is gathered into lanes,
+/// the kernel runs lane-wise (explicit AVX2 vectors where the CPU has them, see [`super::lanes`]),
+/// and the forces and moments are added to the voxels one link at a time in link order, so every
+/// voxel sums its contributions in the same order whatever the instruction set. The kernel uses
+/// only IEEE additions, multiplications, divisions, square roots and selects (no fused
+/// multiply-add), so the portable and the AVX2 copies of it give the same bits.
 ///
 /// The kernel works in unshifted link-frame coordinates: the axis only picks, per lane, which
 /// component gets the axial stiffness, the rest length and the torsion stiffness (the others get
@@ -299,32 +216,44 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
     voxels: &mut Voxels,
     step: LinkStep,
 ) -> f64 {
-    pulp::Arch::new().dispatch(LinkPass::<DAMPED, ACTUATED> {
-        links,
-        voxels,
-        step,
-    })
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx2) = pulp::x86::V3::try_new() {
+        return pulp::Simd::vectorize(
+            avx2,
+            LinkPass::<_, DAMPED, ACTUATED> {
+                arith: avx2,
+                links,
+                voxels,
+                step,
+            },
+        );
+    }
+    link_pass_lanes::<_, DAMPED, ACTUATED>(Portable, links, voxels, step)
 }
 
-/// [`link_pass`] as a `pulp` operation: compiled once per instruction set, the widest one the
-/// CPU has chosen at run time.
-struct LinkPass<'a, const DAMPED: bool, const ACTUATED: bool> {
+/// [`link_pass`] as a `pulp` operation, so that the kernel is compiled with the instruction set
+/// of its arithmetic enabled.
+struct LinkPass<'a, A: Arith, const DAMPED: bool, const ACTUATED: bool> {
+    arith: A,
     links: &'a Links,
     voxels: &'a mut Voxels,
     step: LinkStep,
 }
 
-impl<const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd for LinkPass<'_, DAMPED, ACTUATED> {
+impl<A: Arith, const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd
+    for LinkPass<'_, A, DAMPED, ACTUATED>
+{
     type Output = f64;
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
-        link_pass_lanes::<DAMPED, ACTUATED>(self.links, self.voxels, self.step)
+        link_pass_lanes::<A, DAMPED, ACTUATED>(self.arith, self.links, self.voxels, self.step)
     }
 }
 
 #[inline(always)]
-fn link_pass_lanes<const DAMPED: bool, const ACTUATED: bool>(
+fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool>(
+    arith: A,
     links: &Links,
     voxels: &mut Voxels,
     step: LinkStep,
@@ -332,26 +261,30 @@ fn link_pass_lanes<const DAMPED: bool, const ACTUATED: bool>(
     let s = step.voxel_size;
     let stretch = step.actuation_factor - 1.0;
     let n = links.len();
-    let mut max_strain = Lanes::splat(0.0);
-    let position = &voxels.position;
-    let orientation = &voxels.orientation;
-    let velocity = &voxels.velocity;
-    let angular_velocity = &voxels.angular_velocity;
-    let force = &mut voxels.force;
-    let torque = &mut voxels.torque;
+    let splat = |x: f64| Lanes::splat(arith, x);
+    let mut max_strain = splat(0.0);
+    // Every voxel array cut to one length, so that one check of an index covers all of them.
+    let nv = voxels.len();
+    let position = &voxels.position[..nv];
+    let orientation = &voxels.orientation[..nv];
+    let velocity = &voxels.velocity[..nv];
+    let angular_velocity = &voxels.angular_velocity[..nv];
+    let force = &mut voxels.force[..nv];
+    let torque = &mut voxels.torque[..nv];
+    let (end_a, end_b, link_axis) = (&links.a[..n], &links.b[..n], &links.axis[..n]);
     let mut k0 = 0;
     while k0 < n {
         let count = LANES.min(n - k0);
         // Lane j holds link k0 + j; past the end, copies of the last link (not scattered).
         let link = |j: usize| {
             let k = (k0 + j).min(n - 1);
-            (links.a[k] as usize, links.b[k] as usize, links.axis[k])
+            (end_a[k] as usize, end_b[k] as usize, link_axis[k])
         };
         let ends: [(usize, usize, u8); LANES] = std::array::from_fn(link);
-        let axis = Lanes::from_fn(|j| f64::from(ends[j].2));
-        let qa = gather_quat(orientation, |j| ends[j].0);
-        let qb = gather_quat(orientation, |j| ends[j].1);
-        let r = V3::gather(|j| position[ends[j].1] - position[ends[j].0]);
+        let axis = Lanes::from_fn(arith, |j| f64::from(ends[j].2));
+        let qa = gather_quat(arith, orientation, |j| ends[j].0);
+        let qb = gather_quat(arith, orientation, |j| ends[j].1);
+        let r = V3::gather(arith, |j| position[ends[j].1] - position[ends[j].0]);
 
         // q_a* q_b, then the sign that puts it in the w ≥ 0 hemisphere.
         let [aw, ax, ay, az] = qa;
@@ -362,60 +295,64 @@ fn link_pass_lanes<const DAMPED: bool, const ACTUATED: bool>(
             y: aw * by + ax * bz - ay * bw - az * bx,
             z: aw * bz - ax * by + ay * bx - az * bw,
         };
-        let sign = rel_w.map(|w| if w < 0.0 { -1.0 } else { 1.0 });
+        let sign = Lanes {
+            v: arith.select_negative(rel_w.v, arith.splat(-1.0), arith.splat(1.0)),
+            arith,
+        };
         let w = rel_w * sign;
         // Mid frame: q_a (q_rel + 1) = q_a + sign |q_a|² q_b, normalised in the matrix.
         let na = aw * aw + ax * ax + ay * ay + az * az;
         let t = sign * na;
         let mid = [aw + t * bw, ax + t * bx, ay + t * by, az + t * bz];
         let mid_norm2 = mid[0] * mid[0] + mid[1] * mid[1] + mid[2] * mid[2] + mid[3] * mid[3];
-        let frame = M3::from_quat(mid, Lanes::splat(2.0) / mid_norm2);
+        let frame = M3::from_quat(mid, splat(2.0) / mid_norm2);
         let d = frame.apply_transpose(r);
 
         // Rotation vector of sign · q_rel: 2 atan(|v|/w) v/|v|, a series below ~6°
         // (see [`Quat::rotation_vector`]), atan2 in the lanes above.
         let s2 = rel.dot(rel);
-        let inv_w = Lanes::splat(1.0) / w;
+        let inv_w = splat(1.0) / w;
         let t2 = s2 * inv_w * inv_w;
-        let series = Lanes::splat(1.0)
-            - t2 * (Lanes::splat(1.0 / 3.0) - t2 * (Lanes::splat(0.2) - t2 * (1.0 / 7.0)));
+        let series = splat(1.0) - t2 * (splat(1.0 / 3.0) - t2 * (splat(0.2) - t2 * (1.0 / 7.0)));
         let mut phi_scale = inv_w * series * 2.0;
-        if !t2.0.iter().all(|&t2| series_holds(t2)) {
-            phi_scale = Lanes::from_fn(|j| {
-                if series_holds(t2.0[j]) {
-                    phi_scale.0[j]
+        let t2 = t2.to_array();
+        if !t2.iter().all(|&t2| series_holds(t2)) {
+            let (scale, s2, w) = (phi_scale.to_array(), s2.to_array(), w.to_array());
+            phi_scale = Lanes::from_fn(arith, |j| {
+                if series_holds(t2[j]) {
+                    scale[j]
                 } else {
-                    let sv = s2.0[j].sqrt();
-                    2.0 * sv.atan2(w.0[j]) / sv
+                    let sv = s2[j].sqrt();
+                    2.0 * sv.atan2(w[j]) / sv
                 }
             });
         }
         let phi = rel.scale(phi_scale * sign);
 
         let rest = if ACTUATED {
-            (Lanes::load(&links.actuated_fraction, k0) * stretch + Lanes::splat(1.0)) * s
+            (Lanes::load(arith, &links.actuated_fraction, k0) * stretch + splat(1.0)) * s
         } else {
-            Lanes::splat(s)
+            splat(s)
         };
-        let zero = Lanes::splat(0.0);
+        let zero = splat(0.0);
         // d minus the rest length on the link axis; its axial component is the elongation δ.
         let mut e = d - axial_split(axis, rest, zero);
         let delta = on_axis(axis, 0.0, e.x, on_axis(axis, 1.0, e.y, e.z));
-        max_strain = max_strain.zip(delta, |m, x| m.max(x.abs()));
+        max_strain.v = arith.max_abs(max_strain.v, delta.v);
 
         // Generalised deformation: the elastic one, plus β times its rate when damped
         // (stiffness-proportional damping through the same element, so it dissipates, leaves
         // rigid motion alone and balances its moments exactly like the elastic forces).
         let mut p = phi;
         if DAMPED {
-            let va = V3::gather(|j| velocity[ends[j].0]);
-            let vb = V3::gather(|j| velocity[ends[j].1]);
-            let wa = V3::gather(|j| angular_velocity[ends[j].0]);
-            let wb = V3::gather(|j| angular_velocity[ends[j].1]);
+            let va = V3::gather(arith, |j| velocity[ends[j].0]);
+            let vb = V3::gather(arith, |j| velocity[ends[j].1]);
+            let wa = V3::gather(arith, |j| angular_velocity[ends[j].0]);
+            let wb = V3::gather(arith, |j| angular_velocity[ends[j].1]);
             // Rate of d in the link frame, which turns with the mean spin of the pair.
-            let spin = (wa + wb).scale(Lanes::splat(0.5));
+            let spin = (wa + wb).scale(splat(0.5));
             let v_rel = vb - va - spin.cross(r);
-            let beta = Lanes::load(&links.damping_time, k0);
+            let beta = Lanes::load(arith, &links.damping_time, k0);
             e = e + frame.apply_transpose(v_rel).scale(beta);
             p = p + frame.apply_transpose(wb - wa).scale(beta);
         }
@@ -424,13 +361,13 @@ fn link_pass_lanes<const DAMPED: bool, const ACTUATED: bool>(
         // shear (12EI/L³) and bending (EI/L) across it.
         let k_e = axial_split(
             axis,
-            Lanes::load(&links.axial, k0),
-            Lanes::load(&links.shear, k0),
+            Lanes::load(arith, &links.axial, k0),
+            Lanes::load(arith, &links.shear, k0),
         );
         let k_p = axial_split(
             axis,
-            Lanes::load(&links.torsion, k0),
-            Lanes::load(&links.bending, k0),
+            Lanes::load(arith, &links.torsion, k0),
+            Lanes::load(arith, &links.bending, k0),
         );
         let f_b = frame.apply(V3 {
             x: -(k_e.x * e.x),
@@ -442,20 +379,24 @@ fn link_pass_lanes<const DAMPED: bool, const ACTUATED: bool>(
             y: k_p.y * p.y,
             z: k_p.z * p.z,
         });
-        let c = f_b.cross(r).scale(Lanes::splat(0.5));
+        let c = f_b.cross(r).scale(splat(0.5));
         let m_a = m_sym + c;
         let m_b = c - m_sym;
 
+        let (f_b, m_a, m_b) = (f_b.lanes(), m_a.lanes(), m_b.lanes());
         for (j, &(ia, ib, _)) in ends.iter().enumerate().take(count) {
-            let f = f_b.lane(j);
-            force[ib] += f;
-            force[ia] -= f;
-            torque[ia] += m_a.lane(j);
-            torque[ib] += m_b.lane(j);
+            force[ib] += f_b[j];
+            force[ia] -= f_b[j];
+            torque[ia] += m_a[j];
+            torque[ib] += m_b[j];
         }
         k0 += LANES;
     }
-    max_strain.0.iter().fold(0.0, |m: f64, &x| m.max(x)) * (1.0 / s)
+    max_strain
+        .to_array()
+        .iter()
+        .fold(0.0, |m: f64, &x| m.max(x))
+        * (1.0 / s)
 }
 
 /// Elastic energy of all links (J), consistent with the forces of [`link_pass`] to second order.
@@ -499,8 +440,8 @@ mod tests {
     use crate::material::{Material, MaterialId, Palette};
     use crate::voxel::{GridDims, VoxelGrid};
 
-    /// The dispatched pass (AVX2 where the CPU has it) and the lane kernel compiled for the
-    /// baseline target (SSE2) give the same bits, large rotations and a partial last group
+    /// The dispatched pass (explicit AVX2 vectors where the CPU has them) and the portable lane
+    /// kernel give the same bits, large rotations (the `atan2` lanes) and a partial last group
     /// included.
     #[test]
     fn dispatched_and_baseline_kernels_agree_bit_for_bit() {
@@ -524,7 +465,7 @@ mod tests {
         };
         let (mut a, mut b) = (v.clone(), v);
         let strain_a = link_pass::<true, true>(&links, &mut a, step);
-        let strain_b = link_pass_lanes::<true, true>(&links, &mut b, step);
+        let strain_b = link_pass_lanes::<_, true, true>(Portable, &links, &mut b, step);
         assert_eq!(strain_a.to_bits(), strain_b.to_bits());
         let bits = |w: &[Vec3]| -> Vec<[u64; 3]> {
             w.iter()

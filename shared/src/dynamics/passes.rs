@@ -177,18 +177,30 @@ pub fn integrate_pass(voxels: &mut Voxels, dt: f64) -> IntegrationSummary {
     let mut max_speed2: f64 = 0.0;
     let mut checksum = 0.0;
     let half_dt = 0.5 * dt;
-    for i in 0..voxels.len() {
-        let p = voxels.momentum[i] + voxels.force[i] * dt;
-        voxels.momentum[i] = p;
-        let v = p * voxels.inv_mass[i];
-        voxels.velocity[i] = v;
-        let x = voxels.position[i] + v * dt;
-        voxels.position[i] = x;
-        let l = voxels.angular_momentum[i] + voxels.torque[i] * dt;
-        voxels.angular_momentum[i] = l;
-        let w = l * voxels.inv_inertia[i];
-        voxels.angular_velocity[i] = w;
-        let q = voxels.orientation[i];
+    // Every array cut to one length, so that the loop's index is checked once, not per array.
+    let n = voxels.len();
+    let momentum = &mut voxels.momentum[..n];
+    let force = &mut voxels.force[..n];
+    let inv_mass = &voxels.inv_mass[..n];
+    let velocity = &mut voxels.velocity[..n];
+    let position = &mut voxels.position[..n];
+    let angular_momentum = &mut voxels.angular_momentum[..n];
+    let torque = &mut voxels.torque[..n];
+    let inv_inertia = &voxels.inv_inertia[..n];
+    let angular_velocity = &mut voxels.angular_velocity[..n];
+    let orientation = &mut voxels.orientation[..n];
+    for i in 0..n {
+        let p = momentum[i] + force[i] * dt;
+        momentum[i] = p;
+        let v = p * inv_mass[i];
+        velocity[i] = v;
+        let x = position[i] + v * dt;
+        position[i] = x;
+        let l = angular_momentum[i] + torque[i] * dt;
+        angular_momentum[i] = l;
+        let w = l * inv_inertia[i];
+        angular_velocity[i] = w;
+        let q = orientation[i];
         // q̇ = ½ ω q (ω in the world frame), then back onto the unit sphere.
         let dq = Quat {
             w: 0.0,
@@ -197,15 +209,15 @@ pub fn integrate_pass(voxels: &mut Voxels, dt: f64) -> IntegrationSummary {
             z: w.z,
         }
         .compose(q);
-        voxels.orientation[i] = Quat {
+        orientation[i] = Quat {
             w: q.w + half_dt * dq.w,
             x: q.x + half_dt * dq.x,
             y: q.y + half_dt * dq.y,
             z: q.z + half_dt * dq.z,
         }
         .normalized();
-        voxels.force[i] = Vec3::ZERO;
-        voxels.torque[i] = Vec3::ZERO;
+        force[i] = Vec3::ZERO;
+        torque[i] = Vec3::ZERO;
         max_speed2 = max_speed2.max(v.norm2());
         checksum += x.x + x.y + x.z + l.x + l.y + l.z;
     }
