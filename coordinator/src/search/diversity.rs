@@ -94,29 +94,47 @@ fn run_best(islands: &[Island]) -> Option<&Individual> {
 }
 
 /// Measures every island against the run's best individual (the fittest of all islands, the
-/// lowest island on a tie); designs are made by `scene` at `dims`.
+/// lowest island on a tie); designs are made by `scene` at `dims`. Every pair afresh: the
+/// reference for [`DiversityLog`]'s incremental measurement.
 pub fn measure(islands: &[Island], scene: &Scene, dims: GridDims) -> Vec<IslandDiversity> {
+    measure_with(islands, scene, dims, |_, island, run_best_design| {
+        let designs: Vec<VoxelGrid> = island
+            .population
+            .iter()
+            .map(|ind| scene.design(&ind.genome, dims))
+            .collect();
+        (
+            mean_pairwise_distance(island),
+            mean_pairwise_design_distance(&designs),
+            design_distance(&designs[island.best_index()], run_best_design),
+        )
+    })
+}
+
+/// The rows of [`measure`], with each island's two pairwise means and its best's design distance
+/// to the run's best (given the run best's design) from `per_island(k, island, run_best_design)`.
+fn measure_with(
+    islands: &[Island],
+    scene: &Scene,
+    dims: GridDims,
+    mut per_island: impl FnMut(usize, &Island, &VoxelGrid) -> (f64, f64, f64),
+) -> Vec<IslandDiversity> {
     let Some(run_best) = run_best(islands) else {
         return Vec::new();
     };
     let run_best_design = scene.design(&run_best.genome, dims);
     islands
         .iter()
-        .map(|island| {
-            let designs: Vec<VoxelGrid> = island
-                .population
-                .iter()
-                .map(|ind| scene.design(&ind.genome, dims))
-                .collect();
+        .enumerate()
+        .map(|(k, island)| {
+            let (mean_pairwise, design_pairwise, design_to_run_best) =
+                per_island(k, island, &run_best_design);
             IslandDiversity {
                 island: island.id.0,
-                mean_pairwise: mean_pairwise_distance(island),
+                mean_pairwise,
                 best_to_run_best: genome_distance(&island.best().genome, &run_best.genome),
-                design_pairwise: mean_pairwise_design_distance(&designs),
-                design_to_run_best: design_distance(
-                    &designs[island.best_index()],
-                    &run_best_design,
-                ),
+                design_pairwise,
+                design_to_run_best,
                 step_scale: island.step_scale(),
             }
         })
@@ -222,29 +240,17 @@ impl DiversityLog {
         scene: &Scene,
         dims: GridDims,
     ) -> Vec<IslandDiversity> {
-        let Some(run_best) = run_best(islands) else {
-            return Vec::new();
-        };
-        let run_best_design = scene.design(&run_best.genome, dims);
         self.cache.resize_with(islands.len(), IslandCache::default);
-        islands
-            .iter()
-            .zip(&mut self.cache)
-            .map(|(island, cache)| {
-                let (mean_pairwise, design_pairwise) = cache.update(island, scene, dims);
-                IslandDiversity {
-                    island: island.id.0,
-                    mean_pairwise,
-                    best_to_run_best: genome_distance(&island.best().genome, &run_best.genome),
-                    design_pairwise,
-                    design_to_run_best: design_distance(
-                        &cache.designs[island.best_index()],
-                        &run_best_design,
-                    ),
-                    step_scale: island.step_scale(),
-                }
-            })
-            .collect()
+        let cache = &mut self.cache;
+        measure_with(islands, scene, dims, |k, island, run_best_design| {
+            let (mean_pairwise, design_pairwise) = cache[k].update(island, scene, dims);
+            let best_design = &cache[k].designs[island.best_index()];
+            (
+                mean_pairwise,
+                design_pairwise,
+                design_distance(best_design, run_best_design),
+            )
+        })
     }
 
     /// Measures the islands after `epoch` (designs at `dims`), logs and writes one row per island.
@@ -342,8 +348,7 @@ mod tests {
             .enumerate()
         {
             if epoch % 2 == 1 {
-                islands[epoch % 2].population[epoch % 3].genome =
-                    point_at(0.05 + 0.1 * epoch as f64);
+                islands[epoch % 2].population[epoch % 3].genome = blob(0.05 + 0.1 * epoch as f64);
             }
             let fresh = measure(&islands, &scene, dims);
             designs_differ |= fresh.iter().any(|d| d.design_pairwise > 0.0);

@@ -5,8 +5,8 @@
 //! them) and `pulp`'s AVX2 token (explicit 4-wide vector instructions). Explicit vectors make the
 //! vector code a property of the source: left to the optimizer, a change as small as removing
 //! a bounds check turned the whole kernel back into scalar code (docs/dynamics.md, "Speed").
-//! Both use only IEEE addition, subtraction, multiplication and division per lane, never a fused
-//! multiply-add, so they give the same bits.
+//! Both use only IEEE addition, subtraction, multiplication and division per lane, besides sign
+//! flips and selects, never a fused multiply-add, so they give the same bits.
 
 use pulp::Simd;
 
