@@ -1,4 +1,5 @@
-//! Lane arithmetic for the link kernel: four links at once, one `f64` per lane.
+//! Lane arithmetic for the link kernel and the integration: four links or voxels at once, one
+//! `f64` per lane.
 //!
 //! The kernel is written once, on [`Lanes`], and compiled for two instruction sets through the
 //! [`Arith`] token it carries: [`Portable`] (plain `[f64; 4]` loops, whatever the compiler makes of
@@ -9,6 +10,8 @@
 //! flips and selects, never a fused multiply-add, so they give the same bits.
 
 use pulp::Simd;
+
+use super::math::{Quat, Vec3};
 
 /// Links computed together, one per lane.
 pub const LANES: usize = 4;
@@ -23,6 +26,8 @@ pub trait Arith: Copy {
     fn sub(self, a: Self::V, b: Self::V) -> Self::V;
     fn mul(self, a: Self::V, b: Self::V) -> Self::V;
     fn div(self, a: Self::V, b: Self::V) -> Self::V;
+    /// The correctly rounded square root, as `f64::sqrt`.
+    fn sqrt(self, a: Self::V) -> Self::V;
     /// −a, by its sign bit (as scalar negation: zeros and NaNs too).
     fn neg(self, a: Self::V) -> Self::V;
     /// Per lane, `a` where `key` equals `k`, else `b`.
@@ -32,6 +37,14 @@ pub trait Arith: Copy {
     /// Per lane, `m.max(|x|)` for a running maximum `m` that is never NaN (a NaN `x` is skipped,
     /// as `f64::max` skips it).
     fn max_abs(self, m: Self::V, x: Self::V) -> Self::V;
+    /// Four 4-vectors, one per lane, as they lie in memory (w0 x0 y0 z0 w1 …: a block of four
+    /// quaternions, one vector each), regrouped into one vector per component.
+    fn columns4(self, image: [Self::V; 4]) -> [Self::V; 4];
+    /// Four 3-vectors, one per lane, as they lie in memory (x0 y0 z0 x1 | y1 z1 x2 y2 |
+    /// z2 x3 y3 z3), regrouped into one vector per component.
+    fn columns3(self, image: [Self::V; 3]) -> [Self::V; 3];
+    /// The inverse of [`Arith::columns3`]: the memory image of one 3-vector per lane.
+    fn image3(self, columns: [Self::V; 3]) -> [Self::V; 3];
 }
 
 /// Any CPU: arrays, lane by lane.
@@ -76,6 +89,10 @@ impl Arith for Portable {
         Self::zip(a, b, |a, b| a / b)
     }
     #[inline(always)]
+    fn sqrt(self, a: Self::V) -> Self::V {
+        a.map(f64::sqrt)
+    }
+    #[inline(always)]
     fn neg(self, a: Self::V) -> Self::V {
         a.map(|a| -a)
     }
@@ -90,6 +107,20 @@ impl Arith for Portable {
     #[inline(always)]
     fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
         Self::zip(m, x, |m, x| m.max(x.abs()))
+    }
+    #[inline(always)]
+    fn columns4(self, image: [Self::V; 4]) -> [Self::V; 4] {
+        std::array::from_fn(|c| std::array::from_fn(|j| image[j][c]))
+    }
+    #[inline(always)]
+    fn columns3(self, image: [Self::V; 3]) -> [Self::V; 3] {
+        let flat: [f64; 12] = bytemuck::cast(image);
+        std::array::from_fn(|c| std::array::from_fn(|j| flat[3 * j + c]))
+    }
+    #[inline(always)]
+    fn image3(self, columns: [Self::V; 3]) -> [Self::V; 3] {
+        let flat: [f64; 12] = std::array::from_fn(|k| columns[k % 3][k / 3]);
+        bytemuck::cast(flat)
     }
 }
 
@@ -125,6 +156,10 @@ impl Arith for pulp::x86::V3 {
         self.div_f64s(a, b)
     }
     #[inline(always)]
+    fn sqrt(self, a: Self::V) -> Self::V {
+        self.sqrt_f64s(a)
+    }
+    #[inline(always)]
     fn neg(self, a: Self::V) -> Self::V {
         self.xor_f64s(a, self.splat_f64s(-0.0))
     }
@@ -140,6 +175,59 @@ impl Arith for pulp::x86::V3 {
     fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
         let x = self.abs_f64s(x);
         self.select_f64s(self.less_than_f64s(m, x), x, m)
+    }
+    #[inline(always)]
+    fn columns4(self, image: [Self::V; 4]) -> [Self::V; 4] {
+        use std::arch::x86_64::__m256d;
+        let avx = self.avx;
+        let r: [__m256d; 4] = image.map(pulp::cast);
+        let (t0, t1) = (
+            avx._mm256_unpacklo_pd(r[0], r[1]),
+            avx._mm256_unpackhi_pd(r[0], r[1]),
+        );
+        let (t2, t3) = (
+            avx._mm256_unpacklo_pd(r[2], r[3]),
+            avx._mm256_unpackhi_pd(r[2], r[3]),
+        );
+        [
+            avx._mm256_permute2f128_pd::<0x20>(t0, t2),
+            avx._mm256_permute2f128_pd::<0x20>(t1, t3),
+            avx._mm256_permute2f128_pd::<0x31>(t0, t2),
+            avx._mm256_permute2f128_pd::<0x31>(t1, t3),
+        ]
+        .map(pulp::cast)
+    }
+    #[inline(always)]
+    fn columns3(self, image: [Self::V; 3]) -> [Self::V; 3] {
+        use std::arch::x86_64::__m256d;
+        let avx = self.avx;
+        // The halves are regrouped, then interleaved into x, y and z.
+        let v: [__m256d; 3] = image.map(pulp::cast);
+        let ends = avx._mm256_permute2f128_pd::<0x30>(v[0], v[2]); // x0 y0 | y3 z3
+        let middle = avx._mm256_permute2f128_pd::<0x21>(v[0], v[2]); // z0 x1 | z2 x3
+        let xy = avx._mm256_blend_pd::<0b1100>(ends, v[1]); // x0 y0 | x2 y2
+        let yz = avx._mm256_blend_pd::<0b1100>(v[1], ends); // y1 z1 | y3 z3
+        [
+            avx._mm256_shuffle_pd::<0b1010>(xy, middle),
+            avx._mm256_shuffle_pd::<0b0101>(xy, yz),
+            avx._mm256_shuffle_pd::<0b1010>(middle, yz),
+        ]
+        .map(pulp::cast)
+    }
+    #[inline(always)]
+    fn image3(self, columns: [Self::V; 3]) -> [Self::V; 3] {
+        use std::arch::x86_64::__m256d;
+        let avx = self.avx;
+        let [x, y, z]: [__m256d; 3] = columns.map(pulp::cast);
+        let xy = avx._mm256_shuffle_pd::<0b0000>(x, y); // x0 y0 | x2 y2
+        let yz = avx._mm256_shuffle_pd::<0b1111>(y, z); // y1 z1 | y3 z3
+        let middle = avx._mm256_shuffle_pd::<0b1010>(z, x); // z0 x1 | z2 x3
+        [
+            avx._mm256_permute2f128_pd::<0x20>(xy, middle),
+            avx._mm256_blend_pd::<0b1100>(yz, xy),
+            avx._mm256_permute2f128_pd::<0x31>(middle, yz),
+        ]
+        .map(pulp::cast)
     }
 }
 
@@ -170,6 +258,14 @@ impl<A: Arith> Lanes<A> {
     #[inline(always)]
     pub fn to_array(self) -> [f64; LANES] {
         self.arith.to_array(self.v)
+    }
+
+    #[inline(always)]
+    pub fn sqrt(self) -> Self {
+        Self {
+            v: self.arith.sqrt(self.v),
+            arith: self.arith,
+        }
     }
 
     /// `src[k0..k0 + LANES]`, the last entry repeated past the end of `src`.
@@ -218,4 +314,43 @@ impl<A: Arith> std::ops::Neg for Lanes<A> {
             arith: self.arith,
         }
     }
+}
+
+/// Four consecutive voxels' 3-vectors as the memory image [`Arith::columns3`] regroups.
+#[inline(always)]
+pub fn load_image3<A: Arith>(arith: A, block: &[Vec3]) -> [A::V; 3] {
+    let block: [Vec3; LANES] = std::array::from_fn(|j| block[j]);
+    bytemuck::cast::<_, [[f64; LANES]; 3]>(block).map(|v| arith.vector(v))
+}
+
+/// Writes a memory image back over four consecutive voxels' 3-vectors.
+#[inline(always)]
+pub fn store_image3<A: Arith>(arith: A, block: &mut [Vec3], image: [A::V; 3]) {
+    let values: [Vec3; LANES] = bytemuck::cast(image.map(|v| arith.to_array(v)));
+    block[..LANES].copy_from_slice(&values);
+}
+
+/// Four consecutive voxels' 3-vectors, one vector per component.
+#[inline(always)]
+pub fn load_columns3<A: Arith>(arith: A, block: &[Vec3]) -> [Lanes<A>; 3] {
+    arith
+        .columns3(load_image3(arith, block))
+        .map(|v| Lanes { v, arith })
+}
+
+/// Four consecutive voxels' quaternions, one vector per component (w, x, y, z).
+#[inline(always)]
+pub fn load_columns4<A: Arith>(arith: A, block: &[Quat]) -> [Lanes<A>; 4] {
+    let block: [Quat; LANES] = std::array::from_fn(|j| block[j]);
+    let image = bytemuck::cast::<_, [[f64; LANES]; 4]>(block).map(|v| arith.vector(v));
+    arith.columns4(image).map(|v| Lanes { v, arith })
+}
+
+/// Writes one vector per component back over four consecutive voxels' quaternions.
+#[inline(always)]
+pub fn store_columns4<A: Arith>(arith: A, block: &mut [Quat], columns: [Lanes<A>; 4]) {
+    // The transposition is its own inverse.
+    let image = arith.columns4(columns.map(|c| c.v));
+    let values: [Quat; LANES] = bytemuck::cast(image.map(|v| arith.to_array(v)));
+    block[..LANES].copy_from_slice(&values);
 }

@@ -17,7 +17,9 @@
 //! imbalance M_a + M_b + d × F_b; it is split between the ends so that every link conserves
 //! angular momentum exactly, as a rigid body needs.
 
-use super::lanes::{Arith, LANES, Lanes, Portable};
+use super::lanes::{
+    Arith, LANES, Lanes, Portable, load_columns3, load_columns4, load_image3, store_image3,
+};
 use super::math::{Quat, Vec3};
 use super::state::{Links, Voxels};
 
@@ -48,6 +50,29 @@ impl<A: Arith> V3<A> {
             y: Lanes::from_fn(arith, |j| v[j].y),
             z: Lanes::from_fn(arith, |j| v[j].z),
         }
+    }
+
+    /// Lane `j` is `block[j]` (a block of [`LANES`] consecutive voxels).
+    #[inline(always)]
+    fn block(arith: A, block: &[Vec3]) -> Self {
+        let [x, y, z] = load_columns3(arith, block);
+        Self { x, y, z }
+    }
+
+    /// Lane `j` added to (or, `SUBTRACT`, taken from) `block[j]`.
+    #[inline(always)]
+    fn add_to<const SUBTRACT: bool>(&self, block: &mut [Vec3]) {
+        let arith = self.x.arith;
+        let delta = arith.image3([self.x.v, self.y.v, self.z.v]);
+        let now = load_image3(arith, block);
+        let new: [A::V; 3] = std::array::from_fn(|k| {
+            if SUBTRACT {
+                arith.sub(now[k], delta[k])
+            } else {
+                arith.add(now[k], delta[k])
+            }
+        });
+        store_image3(arith, block, new);
     }
 
     /// Every lane, as 3-vectors.
@@ -228,7 +253,7 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
             },
         );
     }
-    link_pass_lanes::<_, DAMPED, ACTUATED>(Portable, links, voxels, step)
+    link_pass_lanes::<_, DAMPED, ACTUATED, true>(Portable, links, voxels, step)
 }
 
 /// [`link_pass`] as a `pulp` operation, so that the kernel is compiled with the instruction set
@@ -247,12 +272,126 @@ impl<A: Arith, const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
-        link_pass_lanes::<A, DAMPED, ACTUATED>(self.arith, self.links, self.voxels, self.step)
+        link_pass_lanes::<A, DAMPED, ACTUATED, true>(self.arith, self.links, self.voxels, self.step)
+    }
+}
+
+/// The voxel state the link kernel reads, cut to one length so that one check of an index covers
+/// every array (or to one block of [`LANES`] voxels, see [`VoxelView::block`]).
+#[derive(Clone, Copy)]
+struct VoxelView<'a> {
+    position: &'a [Vec3],
+    orientation: &'a [Quat],
+    velocity: &'a [Vec3],
+    angular_velocity: &'a [Vec3],
+}
+
+impl<'a> VoxelView<'a> {
+    /// Voxels `i0..i0 + LANES`: read through it, lane `j` is voxel `i0 + j`.
+    #[inline(always)]
+    fn block(&self, i0: usize) -> Self {
+        let r = i0..i0 + LANES;
+        Self {
+            position: &self.position[r.clone()],
+            orientation: &self.orientation[r.clone()],
+            velocity: &self.velocity[r.clone()],
+            angular_velocity: &self.angular_velocity[r],
+        }
+    }
+}
+
+/// What the kernel reads of one group of links' two ends, one link per lane.
+struct Ends<A: Arith> {
+    qa: [Lanes<A>; 4],
+    qb: [Lanes<A>; 4],
+    /// x_b − x_a, world frame.
+    r: V3<A>,
+    /// Velocities and spins of both ends (read only when the pass is damped).
+    va: V3<A>,
+    vb: V3<A>,
+    wa: V3<A>,
+    wb: V3<A>,
+}
+
+impl<A: Arith> Ends<A> {
+    /// Lane `j` joins voxel `ia(j)` of `a` to voxel `ib(j)` of `b`.
+    #[inline(always)]
+    fn gather<const DAMPED: bool>(
+        arith: A,
+        a: VoxelView,
+        ia: impl Fn(usize) -> usize,
+        b: VoxelView,
+        ib: impl Fn(usize) -> usize,
+    ) -> Self {
+        let zero = Lanes::splat(arith, 0.0);
+        let zero = V3 {
+            x: zero,
+            y: zero,
+            z: zero,
+        };
+        let (mut va, mut vb, mut wa, mut wb) = (zero, zero, zero, zero);
+        if DAMPED {
+            va = V3::gather(arith, |j| a.velocity[ia(j)]);
+            vb = V3::gather(arith, |j| b.velocity[ib(j)]);
+            wa = V3::gather(arith, |j| a.angular_velocity[ia(j)]);
+            wb = V3::gather(arith, |j| b.angular_velocity[ib(j)]);
+        }
+        Self {
+            qa: gather_quat(arith, a.orientation, &ia),
+            qb: gather_quat(arith, b.orientation, &ib),
+            r: V3::gather(arith, |j| b.position[ib(j)] - a.position[ia(j)]),
+            va,
+            vb,
+            wa,
+            wb,
+        }
+    }
+}
+
+impl<A: Arith> Ends<A> {
+    /// Links from the four voxels of block `a` to the four of block `b`, lane `j` from voxel
+    /// `j` of each: whole-vector loads regrouped by component (the same values as
+    /// [`Ends::gather`], in fewer instructions).
+    #[inline(always)]
+    fn gather_run<const DAMPED: bool>(arith: A, a: VoxelView, b: VoxelView) -> Self {
+        let zero = Lanes::splat(arith, 0.0);
+        let zero = V3 {
+            x: zero,
+            y: zero,
+            z: zero,
+        };
+        let (mut va, mut vb, mut wa, mut wb) = (zero, zero, zero, zero);
+        if DAMPED {
+            va = V3::block(arith, a.velocity);
+            vb = V3::block(arith, b.velocity);
+            wa = V3::block(arith, a.angular_velocity);
+            wb = V3::block(arith, b.angular_velocity);
+        }
+        Self {
+            qa: load_columns4(arith, a.orientation),
+            qb: load_columns4(arith, b.orientation),
+            r: {
+                // x_b − x_a component by component in memory order, then regrouped.
+                let (xa, xb) = (
+                    load_image3(arith, a.position),
+                    load_image3(arith, b.position),
+                );
+                let [x, y, z] = arith
+                    .columns3(std::array::from_fn(|k| arith.sub(xb[k], xa[k])))
+                    .map(|v| Lanes { v, arith });
+                V3 { x, y, z }
+            },
+            va,
+            vb,
+            wa,
+            wb,
+        }
     }
 }
 
 #[inline(always)]
-fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool>(
+/// `RUNS` false reads every group through the general gather (for the test that the two agree).
+fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool, const RUNS: bool>(
     arith: A,
     links: &Links,
     voxels: &mut Voxels,
@@ -263,14 +402,26 @@ fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool>(
     let n = links.len();
     let splat = |x: f64| Lanes::splat(arith, x);
     let mut max_strain = splat(0.0);
-    // Every voxel array cut to one length, so that one check of an index covers all of them.
     let nv = voxels.len();
-    let position = &voxels.position[..nv];
-    let orientation = &voxels.orientation[..nv];
-    let velocity = &voxels.velocity[..nv];
-    let angular_velocity = &voxels.angular_velocity[..nv];
-    let force = &mut voxels.force[..nv];
-    let torque = &mut voxels.torque[..nv];
+    // The kernel reads the state while the forces accumulate, so the pass works on a copy of
+    // the accumulators' borrow split from the state's.
+    let Voxels {
+        position,
+        orientation,
+        velocity,
+        angular_velocity,
+        force,
+        torque,
+        ..
+    } = voxels;
+    let view = VoxelView {
+        position: &position[..nv],
+        orientation: &orientation[..nv],
+        velocity: &velocity[..nv],
+        angular_velocity: &angular_velocity[..nv],
+    };
+    let force = &mut force[..nv];
+    let torque = &mut torque[..nv];
     let (end_a, end_b, link_axis) = (&links.a[..n], &links.b[..n], &links.axis[..n]);
     let mut k0 = 0;
     while k0 < n {
@@ -281,11 +432,27 @@ fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool>(
             (end_a[k] as usize, end_b[k] as usize, link_axis[k])
         };
         let ends: [(usize, usize, u8); LANES] = std::array::from_fn(link);
+        // A run: four consecutive voxels linked to four consecutive voxels (the links are in
+        // axis-major grid order, so this is every group inside a solid stretch of the body).
+        let (a0, b0) = (ends[0].0, ends[0].1);
+        let run = RUNS
+            && count == LANES
+            && (1..LANES).all(|j| ends[j].0 == a0 + j && ends[j].1 == b0 + j);
         let axis = Lanes::from_fn(arith, |j| f64::from(ends[j].2));
-        let qa = gather_quat(arith, orientation, |j| ends[j].0);
-        let qb = gather_quat(arith, orientation, |j| ends[j].1);
-        let r = V3::gather(arith, |j| position[ends[j].1] - position[ends[j].0]);
-
+        let g = if run {
+            Ends::gather_run::<DAMPED>(arith, view.block(a0), view.block(b0))
+        } else {
+            Ends::gather::<DAMPED>(arith, view, |j| ends[j].0, view, |j| ends[j].1)
+        };
+        let Ends {
+            qa,
+            qb,
+            r,
+            va,
+            vb,
+            wa,
+            wb,
+        } = g;
         // q_a* q_b, then the sign that puts it in the w ≥ 0 hemisphere.
         let [aw, ax, ay, az] = qa;
         let [bw, bx, by, bz] = qb;
@@ -345,10 +512,6 @@ fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool>(
         // rigid motion alone and balances its moments exactly like the elastic forces).
         let mut p = phi;
         if DAMPED {
-            let va = V3::gather(arith, |j| velocity[ends[j].0]);
-            let vb = V3::gather(arith, |j| velocity[ends[j].1]);
-            let wa = V3::gather(arith, |j| angular_velocity[ends[j].0]);
-            let wb = V3::gather(arith, |j| angular_velocity[ends[j].1]);
             // Rate of d in the link frame, which turns with the mean spin of the pair.
             let spin = (wa + wb).scale(splat(0.5));
             let v_rel = vb - va - spin.cross(r);
@@ -383,12 +546,22 @@ fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool>(
         let m_a = m_sym + c;
         let m_b = c - m_sym;
 
-        let (f_b, m_a, m_b) = (f_b.lanes(), m_a.lanes(), m_b.lanes());
-        for (j, &(ia, ib, _)) in ends.iter().enumerate().take(count) {
-            force[ib] += f_b[j];
-            force[ia] -= f_b[j];
-            torque[ia] += m_a[j];
-            torque[ib] += m_b[j];
+        if run {
+            // Each voxel still sums in link order: a voxel that ends one link of the run as b
+            // and a later one as a gets the earlier link's force first.
+            let block = |i0: usize| i0..i0 + LANES;
+            f_b.add_to::<false>(&mut force[block(b0)]);
+            f_b.add_to::<true>(&mut force[block(a0)]);
+            m_b.add_to::<false>(&mut torque[block(b0)]);
+            m_a.add_to::<false>(&mut torque[block(a0)]);
+        } else {
+            let (f_b, m_a, m_b) = (f_b.lanes(), m_a.lanes(), m_b.lanes());
+            for (j, &(ia, ib, _)) in ends.iter().enumerate().take(count) {
+                force[ib] += f_b[j];
+                force[ia] -= f_b[j];
+                torque[ia] += m_a[j];
+                torque[ib] += m_b[j];
+            }
         }
         k0 += LANES;
     }
@@ -442,13 +615,26 @@ mod tests {
 
     /// The dispatched pass (explicit AVX2 vectors where the CPU has them) and the portable lane
     /// kernel give the same bits, large rotations (the `atan2` lanes) and a partial last group
-    /// included.
+    /// included; and so do runs read as blocks and the same links read one by one.
     #[test]
     fn dispatched_and_baseline_kernels_agree_bit_for_bit() {
         let grid = VoxelGrid::filled(GridDims::new(4, 3, 3), MaterialId(0));
         let palette = Palette(vec![Material::new("m", 1.0e6, 0.35)]);
         let (mut v, links) = build_state(&grid, &palette, 0.01, 0.5).unwrap();
         assert_ne!(links.len() % LANES, 0);
+        let runs = (0..links.len() / LANES)
+            .filter(|g| {
+                let k0 = g * LANES;
+                (1..LANES).all(|j| {
+                    links.a[k0 + j] == links.a[k0] + j as u32
+                        && links.b[k0 + j] == links.b[k0] + j as u32
+                })
+            })
+            .count();
+        assert!(
+            runs > 0 && runs < links.len() / LANES,
+            "runs and other groups both"
+        );
         for i in 0..v.len() {
             let t = i as f64;
             let wave =
@@ -463,10 +649,14 @@ mod tests {
             voxel_size: 0.01,
             actuation_factor: 1.05,
         };
-        let (mut a, mut b) = (v.clone(), v);
+        let (mut a, mut b) = (v.clone(), v.clone());
         let strain_a = link_pass::<true, true>(&links, &mut a, step);
-        let strain_b = link_pass_lanes::<_, true, true>(Portable, &links, &mut b, step);
+        let strain_b = link_pass_lanes::<_, true, true, true>(Portable, &links, &mut b, step);
         assert_eq!(strain_a.to_bits(), strain_b.to_bits());
+        // Runs (four voxels linked to four, read as blocks) against the general gather.
+        let mut c = v.clone();
+        let strain_c = link_pass_lanes::<_, true, true, false>(Portable, &links, &mut c, step);
+        assert_eq!(strain_a.to_bits(), strain_c.to_bits());
         let bits = |w: &[Vec3]| -> Vec<[u64; 3]> {
             w.iter()
                 .map(|u| [u.x.to_bits(), u.y.to_bits(), u.z.to_bits()])
@@ -474,6 +664,8 @@ mod tests {
         };
         assert_eq!(bits(&a.force), bits(&b.force));
         assert_eq!(bits(&a.torque), bits(&b.torque));
+        assert_eq!(bits(&a.force), bits(&c.force));
+        assert_eq!(bits(&a.torque), bits(&c.torque));
         assert!(
             a.torque
                 .iter()

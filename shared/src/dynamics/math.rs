@@ -6,7 +6,18 @@ use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 use serde::{Deserialize, Serialize};
 
 /// A 3-vector in metres, newtons, radians… whatever the variable name says.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Serialize,
+    Deserialize,
+    bytemuck::Pod,
+    bytemuck::Zeroable,
+)]
+#[repr(C)]
 pub struct Vec3 {
     pub x: f64,
     pub y: f64,
@@ -119,7 +130,10 @@ impl SubAssign for Vec3 {
 }
 
 /// A rotation as a unit quaternion `w + xi + yj + zk`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Serialize, Deserialize, bytemuck::Pod, bytemuck::Zeroable,
+)]
+#[repr(C)]
 pub struct Quat {
     pub w: f64,
     pub x: f64,

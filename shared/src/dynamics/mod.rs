@@ -12,6 +12,7 @@
 
 mod collide;
 mod error;
+mod integrate;
 mod lanes;
 mod link;
 mod math;

@@ -1,8 +1,8 @@
-//! The per-voxel passes of a step besides the links: external loads, gravity, global damping,
-//! floor contact with Coulomb friction, and the symplectic Euler integration. Each is a plain loop
-//! over flat arrays; the scene decides once which of them exist.
+//! The per-voxel passes of a step besides the links and the integration (`integrate.rs`): external
+//! loads, gravity, global damping, floor contact with Coulomb friction. Each is a plain loop over
+//! flat arrays; the scene decides once which of them exist.
 
-use super::math::{Quat, Vec3};
+use super::math::Vec3;
 use super::scene::FrictionLaw;
 use super::state::Voxels;
 
@@ -158,72 +158,6 @@ fn voxcad_contact(
         let p = &mut voxels.momentum[i];
         p.x = 0.0;
         p.y = 0.0;
-    }
-}
-
-/// What the integration saw, for divergence detection.
-#[derive(Clone, Copy, Debug)]
-pub struct IntegrationSummary {
-    /// Largest squared speed, m²/s².
-    pub max_speed2: f64,
-    /// Sum of all position and momentum components: non-finite iff some state is.
-    pub checksum: f64,
-}
-
-/// Semi-implicit (symplectic) Euler: momenta from the forces, then positions and orientations
-/// from the new momenta. Clears the force accumulators for the next step.
-#[inline(never)]
-pub fn integrate_pass(voxels: &mut Voxels, dt: f64) -> IntegrationSummary {
-    let mut max_speed2: f64 = 0.0;
-    let mut checksum = 0.0;
-    let half_dt = 0.5 * dt;
-    // Every array cut to one length, so that the loop's index is checked once, not per array.
-    let n = voxels.len();
-    let momentum = &mut voxels.momentum[..n];
-    let force = &mut voxels.force[..n];
-    let inv_mass = &voxels.inv_mass[..n];
-    let velocity = &mut voxels.velocity[..n];
-    let position = &mut voxels.position[..n];
-    let angular_momentum = &mut voxels.angular_momentum[..n];
-    let torque = &mut voxels.torque[..n];
-    let inv_inertia = &voxels.inv_inertia[..n];
-    let angular_velocity = &mut voxels.angular_velocity[..n];
-    let orientation = &mut voxels.orientation[..n];
-    for i in 0..n {
-        let p = momentum[i] + force[i] * dt;
-        momentum[i] = p;
-        let v = p * inv_mass[i];
-        velocity[i] = v;
-        let x = position[i] + v * dt;
-        position[i] = x;
-        let l = angular_momentum[i] + torque[i] * dt;
-        angular_momentum[i] = l;
-        let w = l * inv_inertia[i];
-        angular_velocity[i] = w;
-        let q = orientation[i];
-        // q̇ = ½ ω q (ω in the world frame), then back onto the unit sphere.
-        let dq = Quat {
-            w: 0.0,
-            x: w.x,
-            y: w.y,
-            z: w.z,
-        }
-        .compose(q);
-        orientation[i] = Quat {
-            w: q.w + half_dt * dq.w,
-            x: q.x + half_dt * dq.x,
-            y: q.y + half_dt * dq.y,
-            z: q.z + half_dt * dq.z,
-        }
-        .normalized();
-        force[i] = Vec3::ZERO;
-        torque[i] = Vec3::ZERO;
-        max_speed2 = max_speed2.max(v.norm2());
-        checksum += x.x + x.y + x.z + l.x + l.y + l.z;
-    }
-    IntegrationSummary {
-        max_speed2,
-        checksum,
     }
 }
 

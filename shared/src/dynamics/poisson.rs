@@ -42,6 +42,8 @@ pub struct PoissonCoupling {
     volume: f64,
     /// Scratch per voxel and axis: first the weighted strains ẽᵢ, then ∂W_c/∂ẽᵢ times `scale`.
     scratch: Vec<[f64; 3]>,
+    /// Scratch per link: its length |x_b − x_a| this step, measured once for both loops.
+    lengths: Vec<f64>,
 }
 
 /// Condensed elastic constants (M, λ) of a voxel of modulus `e` and Poisson's ratio `nu` with
@@ -94,6 +96,7 @@ impl PoissonCoupling {
             root_modulus,
             volume: voxel_size.powi(3),
             scratch: vec![[0.0; 3]; n],
+            lengths: vec![0.0; links.len()],
         }
     }
 
@@ -107,22 +110,25 @@ impl PoissonCoupling {
     /// i, into `strain`: with one material it is √λ ēᵢ, and weighting each link by its own
     /// modulus keeps W_c below the links' own energy where a stiff voxel meets a soft one (with
     /// a voxel's λ on a soft link's strain the sum is not positive definite: a 1e4 stiffness
-    /// jump diverged within 400 steps). Strains are against the links' rest lengths at `step`.
+    /// jump diverged within 400 steps). Strains are against the links' rest lengths at `step`;
+    /// each link's length goes into `lengths`.
     fn weighted_strains(
         &self,
         strain: &mut [[f64; 3]],
+        lengths: &mut [f64],
         links: &Links,
         voxels: &Voxels,
         step: LinkStep,
     ) {
         let stretch = step.actuation_factor - 1.0;
         strain.fill([0.0; 3]);
-        for k in 0..links.len() {
+        for (k, length_k) in lengths.iter_mut().enumerate().take(links.len()) {
             let (a, b) = (links.a[k] as usize, links.b[k] as usize);
             let axis = usize::from(links.axis[k]);
             let rest = links.rest_length(k, step.voxel_size, stretch);
-            let e = ((voxels.position[b] - voxels.position[a]).norm() / rest - 1.0)
-                * self.root_modulus[k];
+            let length = (voxels.position[b] - voxels.position[a]).norm();
+            *length_k = length;
+            let e = (length / rest - 1.0) * self.root_modulus[k];
             strain[a][axis] += e * self.scale[a][axis];
             strain[b][axis] += e * self.scale[b][axis];
         }
@@ -133,7 +139,8 @@ impl PoissonCoupling {
     pub fn pass(&mut self, links: &Links, voxels: &mut Voxels, step: LinkStep) {
         let stretch = step.actuation_factor - 1.0;
         let mut scratch = std::mem::take(&mut self.scratch);
-        self.weighted_strains(&mut scratch, links, voxels, step);
+        let mut lengths = std::mem::take(&mut self.lengths);
+        self.weighted_strains(&mut scratch, &mut lengths, links, voxels, step);
         for (e, scale) in scratch.iter_mut().zip(&self.scale) {
             // ∂W_c/∂ẽᵢ = V Σ_{j≠i} ẽⱼ, times the link-independent part of ∂ẽᵢ/∂ε_l.
             let [ex, ey, ez] = *e;
@@ -144,24 +151,26 @@ impl PoissonCoupling {
                 v * (ex + ey) * scale[2],
             ];
         }
-        for k in 0..links.len() {
+        for (k, &length) in lengths.iter().enumerate().take(links.len()) {
             let (a, b) = (links.a[k] as usize, links.b[k] as usize);
             let axis = usize::from(links.axis[k]);
             let generalised = (scratch[a][axis] + scratch[b][axis]) * self.root_modulus[k];
             let r = voxels.position[b] - voxels.position[a];
             let rest = links.rest_length(k, step.voxel_size, stretch);
             // ∂ε/∂x_b = r/(|r| L₀): the force on b is −(∂W_c/∂ε) times that.
-            let f = r * (generalised / (r.norm() * rest));
+            let f = r * (generalised / (length * rest));
             voxels.force[a] += f;
             voxels.force[b] -= f;
         }
         self.scratch = scratch;
+        self.lengths = lengths;
     }
 
     /// The coupling energy W_c = V Σ_v Σᵢ<ⱼ ẽᵢ ẽⱼ (J) of the current state.
     pub fn energy(&self, links: &Links, voxels: &Voxels, step: LinkStep) -> f64 {
         let mut strain = vec![[0.0; 3]; self.scale.len()];
-        self.weighted_strains(&mut strain, links, voxels, step);
+        let mut lengths = vec![0.0; links.len()];
+        self.weighted_strains(&mut strain, &mut lengths, links, voxels, step);
         self.volume
             * strain
                 .iter()

@@ -7,11 +7,11 @@ use serde::{Deserialize, Serialize};
 
 use super::collide::Collisions;
 use super::error::{DynamicsError, Result};
+use super::integrate::integrate_pass;
 use super::link::{LinkStep, link_energy, link_pass};
 use super::math::Vec3;
 use super::passes::{
     FloorContact, external_force_pass, floor_pass, global_damping_pass, gravity_pass,
-    integrate_pass,
 };
 use super::poisson::PoissonCoupling;
 use super::scene::DynamicScene;

@@ -155,11 +155,14 @@ pub fn build_state(
         *field = vec![Vec3::ZERO; n];
     }
 
+    // Links by axis, each axis in grid order: along the body's solid runs four consecutive links
+    // join four consecutive voxels to four consecutive voxels, which the link pass reads and
+    // writes as blocks (see `link::link_pass`).
     let mut l = Links::default();
-    for (cell_index, material) in grid.cells().iter().enumerate() {
-        let Some(ma) = material else { continue };
-        let [x, y, z] = dims.coords(cell_index);
-        for axis in 0..3u8 {
+    for axis in 0..3u8 {
+        for (cell_index, material) in grid.cells().iter().enumerate() {
+            let Some(ma) = material else { continue };
+            let [x, y, z] = dims.coords(cell_index);
             let (nx, ny, nz) = match axis {
                 0 => (x + 1, y, z),
                 1 => (x, y + 1, z),
