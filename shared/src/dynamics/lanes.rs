@@ -330,6 +330,20 @@ pub fn store_image3<A: Arith>(arith: A, block: &mut [Vec3], image: [A::V; 3]) {
     block[..LANES].copy_from_slice(&values);
 }
 
+/// Adds (or, `SUBTRACT`, takes) a memory image of four 3-vectors to four consecutive voxels'.
+#[inline(always)]
+pub fn add_image3<const SUBTRACT: bool, A: Arith>(arith: A, block: &mut [Vec3], delta: [A::V; 3]) {
+    let now = load_image3(arith, block);
+    let new = std::array::from_fn(|c| {
+        if SUBTRACT {
+            arith.sub(now[c], delta[c])
+        } else {
+            arith.add(now[c], delta[c])
+        }
+    });
+    store_image3(arith, block, new);
+}
+
 /// Four consecutive voxels' 3-vectors, one vector per component.
 #[inline(always)]
 pub fn load_columns3<A: Arith>(arith: A, block: &[Vec3]) -> [Lanes<A>; 3] {
