@@ -71,6 +71,26 @@ struct VoxelState<'a> {
     orientation: &'a mut [Quat],
 }
 
+impl<'a> VoxelState<'a> {
+    /// Every array cut to the voxel count, so that one index check covers all of them.
+    #[inline(always)]
+    fn new(voxels: &'a mut Voxels) -> Self {
+        let n = voxels.len();
+        Self {
+            momentum: &mut voxels.momentum[..n],
+            force: &mut voxels.force[..n],
+            inv_mass: &voxels.inv_mass[..n],
+            velocity: &mut voxels.velocity[..n],
+            position: &mut voxels.position[..n],
+            angular_momentum: &mut voxels.angular_momentum[..n],
+            torque: &mut voxels.torque[..n],
+            inv_inertia: &voxels.inv_inertia[..n],
+            angular_velocity: &mut voxels.angular_velocity[..n],
+            orientation: &mut voxels.orientation[..n],
+        }
+    }
+}
+
 #[inline(always)]
 fn integrate_lanes<A: Arith>(arith: A, voxels: &mut Voxels, dt: f64) -> IntegrationSummary {
     let n = voxels.len();
@@ -79,57 +99,32 @@ fn integrate_lanes<A: Arith>(arith: A, voxels: &mut Voxels, dt: f64) -> Integrat
     let (dt_l, half_dt, zero) = (splat(dt), splat(0.5 * dt), splat(0.0));
     let mut max_speed2 = zero;
     let mut checksum = zero;
-    let Voxels {
-        momentum,
-        force,
-        inv_mass,
-        velocity,
-        position,
-        angular_momentum,
-        torque,
-        inv_inertia,
-        angular_velocity,
-        orientation,
-        ..
-    } = voxels;
-    let (momentum, force, velocity, position) = (
-        &mut momentum[..n],
-        &mut force[..n],
-        &mut velocity[..n],
-        &mut position[..n],
-    );
-    let (angular_momentum, torque, angular_velocity, orientation) = (
-        &mut angular_momentum[..n],
-        &mut torque[..n],
-        &mut angular_velocity[..n],
-        &mut orientation[..n],
-    );
-    let (inv_mass, inv_inertia) = (&inv_mass[..n], &inv_inertia[..n]);
+    let mut st = VoxelState::new(voxels);
     let load = |block: &[Vec3]| load_columns3(arith, block);
     let store = |block: &mut [Vec3], c: [Lanes<A>; 3]| {
         store_image3(arith, block, arith.image3(c.map(|c| c.v)));
     };
     for i0 in (0..whole).step_by(LANES) {
         let r = i0..i0 + LANES;
-        let f = load(&force[r.clone()]);
-        let m = load(&momentum[r.clone()]);
+        let f = load(&st.force[r.clone()]);
+        let m = load(&st.momentum[r.clone()]);
         let p = [0, 1, 2].map(|c| m[c] + f[c] * dt_l);
-        store(&mut momentum[r.clone()], p);
-        let inv_m = Lanes::load(arith, inv_mass, i0);
+        store(&mut st.momentum[r.clone()], p);
+        let inv_m = Lanes::load(arith, st.inv_mass, i0);
         let v = p.map(|p| p * inv_m);
-        store(&mut velocity[r.clone()], v);
-        let x0 = load(&position[r.clone()]);
+        store(&mut st.velocity[r.clone()], v);
+        let x0 = load(&st.position[r.clone()]);
         let x = [0, 1, 2].map(|c| x0[c] + v[c] * dt_l);
-        store(&mut position[r.clone()], x);
-        let t = load(&torque[r.clone()]);
-        let l0 = load(&angular_momentum[r.clone()]);
+        store(&mut st.position[r.clone()], x);
+        let t = load(&st.torque[r.clone()]);
+        let l0 = load(&st.angular_momentum[r.clone()]);
         let l = [0, 1, 2].map(|c| l0[c] + t[c] * dt_l);
-        store(&mut angular_momentum[r.clone()], l);
-        let inv_i = Lanes::load(arith, inv_inertia, i0);
+        store(&mut st.angular_momentum[r.clone()], l);
+        let inv_i = Lanes::load(arith, st.inv_inertia, i0);
         let w = l.map(|l| l * inv_i);
-        store(&mut angular_velocity[r.clone()], w);
+        store(&mut st.angular_velocity[r.clone()], w);
 
-        let block = &mut orientation[r.clone()];
+        let block = &mut st.orientation[r.clone()];
         let [qw, qx, qy, qz] = load_columns4(arith, block);
         // ½ (0, ω) q term by term as `Quat::compose` computes it, the zero products included.
         let [wx, wy, wz] = w;
@@ -145,8 +140,8 @@ fn integrate_lanes<A: Arith>(arith: A, voxels: &mut Voxels, dt: f64) -> Integrat
         let scale = splat(1.0) / norm;
         store_columns4(arith, block, q.map(|c| c * scale));
 
-        force[r.clone()].fill(Vec3::ZERO);
-        torque[r].fill(Vec3::ZERO);
+        st.force[r.clone()].fill(Vec3::ZERO);
+        st.torque[r].fill(Vec3::ZERO);
         let speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
         max_speed2.v = arith.max_abs(max_speed2.v, speed2.v);
         checksum = checksum + x[0] + x[1] + x[2] + l[0] + l[1] + l[2];
@@ -155,20 +150,8 @@ fn integrate_lanes<A: Arith>(arith: A, voxels: &mut Voxels, dt: f64) -> Integrat
         max_speed2: max_speed2.to_array().into_iter().fold(0.0, f64::max),
         checksum: checksum.to_array().into_iter().sum(),
     };
-    let mut rest = VoxelState {
-        momentum,
-        force,
-        inv_mass,
-        velocity,
-        position,
-        angular_momentum,
-        torque,
-        inv_inertia,
-        angular_velocity,
-        orientation,
-    };
     for i in whole..n {
-        integrate_voxel(&mut rest, i, dt, &mut summary);
+        integrate_voxel(&mut st, i, dt, &mut summary);
     }
     summary
 }
@@ -245,18 +228,7 @@ mod tests {
             checksum: 0.0,
         };
         let n = c.len();
-        let mut one = VoxelState {
-            momentum: &mut c.momentum,
-            force: &mut c.force,
-            inv_mass: &c.inv_mass,
-            velocity: &mut c.velocity,
-            position: &mut c.position,
-            angular_momentum: &mut c.angular_momentum,
-            torque: &mut c.torque,
-            inv_inertia: &c.inv_inertia,
-            angular_velocity: &mut c.angular_velocity,
-            orientation: &mut c.orientation,
-        };
+        let mut one = VoxelState::new(&mut c);
         for i in 0..n {
             integrate_voxel(&mut one, i, dt, &mut sc);
         }

@@ -52,6 +52,12 @@ impl<A: Arith> V3<A> {
         }
     }
 
+    #[inline(always)]
+    fn splat(arith: A, x: f64) -> Self {
+        let x = Lanes::splat(arith, x);
+        Self { x, y: x, z: x }
+    }
+
     /// Lane `j` is `block[j]` (a block of [`LANES`] consecutive voxels).
     #[inline(always)]
     fn block(arith: A, block: &[Vec3]) -> Self {
@@ -315,12 +321,7 @@ impl<A: Arith> Ends<A> {
         b: VoxelView,
         ib: impl Fn(usize) -> usize,
     ) -> Self {
-        let zero = Lanes::splat(arith, 0.0);
-        let zero = V3 {
-            x: zero,
-            y: zero,
-            z: zero,
-        };
+        let zero = V3::splat(arith, 0.0);
         let (mut va, mut vb, mut wa, mut wb) = (zero, zero, zero, zero);
         if DAMPED {
             va = V3::gather(arith, |j| a.velocity[ia(j)]);
@@ -338,20 +339,13 @@ impl<A: Arith> Ends<A> {
             wb,
         }
     }
-}
 
-impl<A: Arith> Ends<A> {
     /// Links from the four voxels of block `a` to the four of block `b`, lane `j` from voxel
     /// `j` of each: whole-vector loads regrouped by component (the same values as
     /// [`Ends::gather`], in fewer instructions).
     #[inline(always)]
     fn gather_run<const DAMPED: bool>(arith: A, a: VoxelView, b: VoxelView) -> Self {
-        let zero = Lanes::splat(arith, 0.0);
-        let zero = V3 {
-            x: zero,
-            y: zero,
-            z: zero,
-        };
+        let zero = V3::splat(arith, 0.0);
         let (mut va, mut vb, mut wa, mut wb) = (zero, zero, zero, zero);
         if DAMPED {
             va = V3::block(arith, a.velocity);
