@@ -375,8 +375,8 @@ impl<A: Arith> Ends<A> {
     }
 }
 
-#[inline(always)]
 /// `RUNS` false reads every group through the general gather (for the test that the two agree).
+#[inline(always)]
 fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool, const RUNS: bool>(
     arith: A,
     links: &Links,
@@ -389,8 +389,8 @@ fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool, const RUN
     let splat = |x: f64| Lanes::splat(arith, x);
     let mut max_strain = splat(0.0);
     let nv = voxels.len();
-    // The kernel reads the state while the forces accumulate, so the pass works on a copy of
-    // the accumulators' borrow split from the state's.
+    // The state is read while force and torque accumulate, so the borrows are split; every array
+    // is cut to the voxel count, so that one check of an index covers all of them.
     let Voxels {
         position,
         orientation,
