@@ -191,7 +191,7 @@ mod tests {
     /// measured once in the pass, twice here), on a deformed 5×4×3 block with two materials and
     /// actuated links: the same bits.
     #[test]
-    fn lanes_and_the_link_by_link_formula_agree_bit_for_bit() {
+    fn the_pass_and_the_link_by_link_formula_agree_bit_for_bit() {
         let mut grid = VoxelGrid::filled(GridDims::new(5, 4, 3), MaterialId(0));
         grid.set(2, 1, 1, Some(MaterialId(1)));
         grid.set(4, 3, 2, Some(MaterialId(1)));
