@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use amorph::task::Metrics;
+use amorph::dynamics::FrictionLaw;
+use amorph::task::locomotion::LocomotionScene;
+use amorph::task::{Metrics, Scene};
 use amorph_coordinator::RunConfig;
 use amorph_tests::{run_locally, scratch_dir};
 
@@ -125,4 +127,40 @@ floor = { incline = 2.0 }
         .unwrap_err()
         .to_string();
     assert!(err.contains("floor.incline"), "{err}");
+}
+
+/// A config that changes one dynamics key keeps every other key the paper's, the actuation
+/// included: before, a `[scene.dynamics]` table without `[scene.dynamics.actuation]` read as a robot
+/// with no actuation, and the run was refused.
+#[test]
+fn a_dynamics_table_changes_only_the_keys_it_names() {
+    let text = r#"
+name = "x"
+seed = 1
+[search]
+population = 4
+[budget]
+evaluations = 4
+[resolution]
+levels = [[4, 4, 4]]
+[scene]
+kind = "locomotion"
+[scene.dynamics.floor]
+friction = "voxcad"
+actuated_contact = true
+"#;
+    let config = RunConfig::parse(text, Path::new("voxcad.toml")).unwrap();
+    let Scene::Locomotion(scene) = &config.raw.scene else {
+        panic!("not a locomotion scene: {:?}", config.raw.scene);
+    };
+    let mut expected = LocomotionScene::default();
+    let floor = expected.dynamics.floor.as_mut().unwrap();
+    floor.friction = FrictionLaw::Voxcad;
+    floor.actuated_contact = true;
+    assert_eq!(scene, &expected);
+    assert!(scene.dynamics.actuation.is_some());
+    // What the run writes back reads as the same scene.
+    let written = toml::to_string(&config.raw).unwrap();
+    let reread = RunConfig::parse(&written, Path::new("config.toml")).unwrap();
+    assert_eq!(reread.raw.scene, config.raw.scene);
 }

@@ -40,7 +40,23 @@ pub struct LocomotionScene {
     pub fitness: LocomotionFitness,
     /// The physics: floor, gravity, actuation, damping, time step (default: the paper's).
     /// `voxel_size` follows `workspace` and the floor's incline follows `incline_degrees`.
+    /// A `[scene.dynamics]` table changes only the keys it names: the rest stay the paper's, the
+    /// actuation included.
+    #[serde(deserialize_with = "paper_dynamics_where_unset")]
     pub dynamics: DynamicScene,
+}
+
+/// A dynamics table that leaves out `actuation` keeps the paper's: otherwise a config that only
+/// changes, say, the floor's friction law would read as a robot that cannot move (a generic
+/// dynamic scene has no actuation by default, and TOML cannot write "none" for it anyway).
+fn paper_dynamics_where_unset<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<DynamicScene, D::Error> {
+    let mut dynamics = DynamicScene::deserialize(deserializer)?;
+    if dynamics.actuation.is_none() {
+        dynamics.actuation = DynamicScene::paper_locomotion().actuation;
+    }
+    Ok(dynamics)
 }
 
 impl Default for LocomotionScene {
