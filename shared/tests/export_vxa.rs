@@ -257,3 +257,53 @@ fn a_truncated_layer_is_refused_naming_the_layer() {
     let err = read_vxa("<VXA><VXC></VXC></VXA>").unwrap_err().to_string();
     assert!(err.contains("Lattice_Dim"), "{err}");
 }
+
+/// A robot's files hold the body as our simulation starts it: on the floor. Those readers drop a
+/// body from where its grid puts it, so a design whose lowest voxels sit in layer 3 fell three
+/// voxels there, tumbled and walked the other way (docs/exports.md). Each voxel keeps its x and y
+/// cell and its material; the empty layers below the body are gone, in the VXA and the VXD alike.
+#[test]
+fn a_robot_is_written_resting_on_the_floor() {
+    let dims = GridDims::new(4, 3, 6);
+    let mut grid = VoxelGrid::empty(dims);
+    // An L of two materials whose lowest voxel is in layer 3 and whose top is in layer 5.
+    for (x, y, z, m) in [
+        (1, 1, 3, 1),
+        (2, 1, 3, 0),
+        (2, 1, 4, 0),
+        (2, 1, 5, 1),
+        (3, 2, 4, 0),
+    ] {
+        grid.set(x, y, z, Some(MaterialId(m)));
+    }
+    let scene = amorph::task::Scene::Locomotion(LocomotionScene::default());
+    let dir = std::env::temp_dir().join(format!("amorph-vxa-floor-{}", std::process::id()));
+    amorph::export::write_fabrication_files(&dir, &grid, &scene, None).unwrap();
+    let read = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
+    let vxa = read_vxa(&read("design.vxa")).unwrap().grid;
+    let merged = read("voxcraft/design.vxd");
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(vxa.dims(), GridDims::new(4, 3, 3));
+    assert_eq!(vxa.filled_count(), grid.filled_count());
+    for z in 0..3 {
+        for y in 0..3 {
+            for x in 0..4 {
+                assert_eq!(vxa.get(x, y, z), grid.get(x, y, z + 3), "cell {x} {y} {z}");
+            }
+        }
+    }
+    // The VXD's structure has the same three layers.
+    assert!(merged.contains("<Z_Voxels>3</Z_Voxels>"), "{merged}");
+    // A beam has no floor: its grid is written as it is, empty layers and all.
+    let beam = amorph::task::Scene::Beam(BeamScene::new(NamedProfile::CircularArc));
+    let beam_dir = std::env::temp_dir().join(format!("amorph-vxa-beam-{}", std::process::id()));
+    let beam_grid = {
+        let mut g = VoxelGrid::empty(GridDims::new(2, 6, 3));
+        g.set(1, 0, 2, Some(MaterialId(0)));
+        g
+    };
+    amorph::export::write_fabrication_files(&beam_dir, &beam_grid, &beam, None).unwrap();
+    let back = read_vxa(&std::fs::read_to_string(beam_dir.join("design.vxa")).unwrap()).unwrap();
+    std::fs::remove_dir_all(&beam_dir).unwrap();
+    assert_eq!(back.grid, beam_grid);
+}

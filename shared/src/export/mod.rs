@@ -86,9 +86,16 @@ pub fn write_fabrication_files(
         written.push(name);
     }
     let settings = scene.simulator_settings(grid.dims(), outcome);
+    // Our simulation lowers a body onto its floor; the simulators that read these files drop it
+    // from where its grid puts it, so a body whose lowest voxels sit three layers up fell 6 mm,
+    // tumbled and walked the other way there (docs/exports.md). They get the body on the floor.
+    let simulated = match &settings {
+        Some(s) if s.scene.floor.is_some() => resting_on_floor(grid),
+        _ => grid.clone(),
+    };
     let vxa = write_vxa(
         &VxaDesign {
-            grid: grid.clone(),
+            grid: simulated.clone(),
             palette: palette.clone(),
             voxel_size,
         },
@@ -105,7 +112,7 @@ pub fn write_fabrication_files(
                 "voxcraft/base.vxa",
                 write_voxcraft_base(palette, voxel_size, shared),
             ),
-            ("voxcraft/design.vxd", write_vxd(grid)),
+            ("voxcraft/design.vxd", write_vxd(&simulated)),
         ] {
             std::fs::write(dir.join(name), text)?;
             written.push(PathBuf::from(name));
@@ -180,4 +187,17 @@ fn file_safe(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// `grid` without the empty layers below its lowest voxel: the body as it rests on a floor at
+/// z = 0, which is where our simulation puts it before it settles. Same x and y extent, so a
+/// voxel keeps its x and y cell; an empty grid comes back unchanged.
+pub fn resting_on_floor(grid: &VoxelGrid) -> VoxelGrid {
+    let d = grid.dims();
+    let plane = d.nx * d.ny;
+    let Some(lowest) = grid.filled_indices().map(|i| i / plane).min() else {
+        return grid.clone();
+    };
+    let dims = crate::voxel::GridDims::new(d.nx, d.ny, d.nz - lowest);
+    VoxelGrid::from_cells(dims, grid.cells()[lowest * plane..].to_vec())
 }
