@@ -106,9 +106,8 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
     assert!(trajectory.lines().count() >= 1 + 1 + 1 + 40);
 }
 
-#[test]
-fn a_locomotion_scene_with_a_bad_field_is_refused_by_name() {
-    let text = r#"
+/// A locomotion run config with nothing but what a parse needs; tests add their scene keys.
+const SMALL_LOCOMOTION_RUN: &str = r#"
 name = "x"
 seed = 1
 [search]
@@ -119,11 +118,19 @@ evaluations = 4
 levels = [[4, 4, 4]]
 [scene]
 kind = "locomotion"
+"#;
+
+#[test]
+fn a_locomotion_scene_with_a_bad_field_is_refused_by_name() {
+    let text = format!(
+        "{SMALL_LOCOMOTION_RUN}{}",
+        r#"
 [scene.dynamics]
 actuation = { amplitude_volume = 0.0, period = 0.1, phase = 0.0 }
 floor = { incline = 2.0 }
-"#;
-    let err = RunConfig::parse(text, Path::new("bad.toml"))
+"#
+    );
+    let err = RunConfig::parse(&text, Path::new("bad.toml"))
         .unwrap_err()
         .to_string();
     assert!(err.contains("floor.incline"), "{err}");
@@ -134,22 +141,15 @@ floor = { incline = 2.0 }
 /// with no actuation, and the run was refused.
 #[test]
 fn a_dynamics_table_changes_only_the_keys_it_names() {
-    let text = r#"
-name = "x"
-seed = 1
-[search]
-population = 4
-[budget]
-evaluations = 4
-[resolution]
-levels = [[4, 4, 4]]
-[scene]
-kind = "locomotion"
+    let text = format!(
+        "{SMALL_LOCOMOTION_RUN}{}",
+        r#"
 [scene.dynamics.floor]
 friction = "voxcad"
 actuated_contact = true
-"#;
-    let config = RunConfig::parse(text, Path::new("voxcad.toml")).unwrap();
+"#
+    );
+    let config = RunConfig::parse(&text, Path::new("voxcad.toml")).unwrap();
     let Scene::Locomotion(scene) = &config.raw.scene else {
         panic!("not a locomotion scene: {:?}", config.raw.scene);
     };
