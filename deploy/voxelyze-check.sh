@@ -31,6 +31,10 @@ grep -q '^dt_fraction = ' "$scene" || {
   exit 2
 }
 root="$(cd "$(dirname "$0")/.." && pwd)"
+# The reader's floor is a spring of 2·E·s per voxel (twice ours by default) damped by
+# 2·√(m·E·s): as ours, a stiffness factor of 2 with a contact damping ratio of 1/√2.
+READER_FLOOR_STIFFNESS=2.0
+READER_FLOOR_DAMPING=0.7071067811865476
 worker="${WORKER:-$root/target/release/worker}"
 [ -x "$worker" ] || { echo "voxelyze-check: no worker at $worker (cargo build --release, or set WORKER)" >&2; exit 2; }
 [ -x "$reader" ] || { echo "voxelyze-check: $reader is not an executable" >&2; exit 2; }
@@ -51,7 +55,9 @@ for genome in "$@"; do
   sed "s/^dt_fraction = .*/dt_fraction = $step/" "$scene" > "$dir/at-file-step.toml"
   "$worker" evaluate --genome "$genome" --scene "$dir/at-file-step.toml" --resolution "$resolution" > "$dir/ours-at-file-step.json"
   grep -Ev '^(actuated_contact|friction) = ' "$dir/at-file-step.toml" |
-    sed 's/^\[scene\.dynamics\.floor\]$/&\nactuated_contact = true\nfriction = "voxcad"/' > "$dir/reader-laws.toml"
+    sed -e 's/^\[scene\.dynamics\.floor\]$/&\nactuated_contact = true\nfriction = "voxcad"/' \
+        -e "s/^stiffness_factor = .*/stiffness_factor = $READER_FLOOR_STIFFNESS/" \
+        -e "s/^contact = .*/contact = $READER_FLOOR_DAMPING/" > "$dir/reader-laws.toml"
   grep -q '^friction = "voxcad"' "$dir/reader-laws.toml" || {
     echo "voxelyze-check: $scene has no [scene.dynamics.floor] table" >&2
     exit 2

@@ -31,6 +31,10 @@ grep -q '^\[scene\.dynamics\.floor\]$' "$scene" || {
   exit 2
 }
 root="$(cd "$(dirname "$0")/.." && pwd)"
+# The reader's floor is a spring of 2·E·s per voxel (twice ours by default) damped by
+# 2·√(m·E·s): as ours, a stiffness factor of 2 with a contact damping ratio of 1/√2.
+READER_FLOOR_STIFFNESS=2.0
+READER_FLOOR_DAMPING=0.7071067811865476
 worker="${WORKER:-$root/target/release/worker}"
 [ -x "$worker" ] || { echo "voxelyze-ensemble: no worker at $worker (cargo build --release, or set WORKER)" >&2; exit 2; }
 [ -x "$reader" ] || { echo "voxelyze-ensemble: $reader is not an executable" >&2; exit 2; }
@@ -47,6 +51,8 @@ for genome in "$@"; do
     phase="$(python3 -c "import math; print(repr(2 * math.pi * $k * 1e-4))")"
     grep -Ev '^(actuated_contact|friction) = ' "$scene" |
       sed -e 's/^\[scene\.dynamics\.floor\]$/&\nactuated_contact = true\nfriction = "voxcad"/' \
+          -e "s/^stiffness_factor = .*/stiffness_factor = $READER_FLOOR_STIFFNESS/" \
+          -e "s/^contact = .*/contact = $READER_FLOOR_DAMPING/" \
           -e "s/^phase = .*/phase = $phase/" > "$dir/scene.toml"
     # Export once to learn the step the file asks the reader for, then export again from a scene
     # at that step, so that the settle the file carries is the one ours measures.
