@@ -31,13 +31,10 @@ grep -q '^dt_fraction = ' "$scene" || {
   exit 2
 }
 root="$(cd "$(dirname "$0")/.." && pwd)"
-# The reader's floor is a spring of 2·E·s per voxel (twice ours by default) damped by
-# 2·√(m·E·s): as ours, a stiffness factor of 2 with a contact damping ratio of 1/√2.
-READER_FLOOR_STIFFNESS=2.0
-READER_FLOOR_DAMPING=0.7071067811865476
-worker="${WORKER:-$root/target/release/worker}"
-[ -x "$worker" ] || { echo "voxelyze-check: no worker at $worker (cargo build --release, or set WORKER)" >&2; exit 2; }
-[ -x "$reader" ] || { echo "voxelyze-check: $reader is not an executable" >&2; exit 2; }
+tool=voxelyze-check
+source "$root/deploy/voxelyze-common.sh"
+worker="$(voxelyze_worker "$root" "$reader")"
+require_floor_table "$scene"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 echo "| design | voxels | settle | ours: travel x (fitness), y | ours at the file's step: x, y | the reader: x, y | reader / ours at the file's step (x) | ours at the file's step with the reader's contact laws: x, y | reader / that (x) |"
@@ -54,22 +51,9 @@ for genome in "$@"; do
   step="$(grep -o '<DtFrac>[^<]*' "$dir/design.vxa" | cut -d'>' -f2)"
   sed "s/^dt_fraction = .*/dt_fraction = $step/" "$scene" > "$dir/at-file-step.toml"
   "$worker" evaluate --genome "$genome" --scene "$dir/at-file-step.toml" --resolution "$resolution" > "$dir/ours-at-file-step.json"
-  grep -Ev '^(actuated_contact|friction) = ' "$dir/at-file-step.toml" |
-    sed -e 's/^\[scene\.dynamics\.floor\]$/&\nactuated_contact = true\nfriction = "voxcad"/' \
-        -e "s/^stiffness_factor = .*/stiffness_factor = $READER_FLOOR_STIFFNESS/" \
-        -e "s/^contact = .*/contact = $READER_FLOOR_DAMPING/" > "$dir/reader-laws.toml"
-  grep -q '^friction = "voxcad"' "$dir/reader-laws.toml" || {
-    echo "voxelyze-check: $scene has no [scene.dynamics.floor] table" >&2
-    exit 2
-  }
+  reader_floor_scene "$dir/at-file-step.toml" > "$dir/reader-laws.toml"
   "$worker" evaluate --genome "$genome" --scene "$dir/reader-laws.toml" --resolution "$resolution" > "$dir/ours-reader-laws.json"
-  # The reader's exit status is 1 even when it ran to the end; its result file is the sign.
-  (cd "$dir" && "$reader" -f design.vxa > reader.log 2>&1) || true
-  [ -s "$dir/fitness.xml" ] || {
-    echo "voxelyze-check: the reader wrote no result for $genome:" >&2
-    tail -5 "$dir/reader.log" >&2
-    exit 1
-  }
+  run_reader "$reader" "$dir" "$genome"
   python3 - "$dir/ours.json" "$dir/ours-at-file-step.json" "$dir/fitness.xml" "$name" "$dir/ours-reader-laws.json" <<'PY'
 import json, sys, xml.etree.ElementTree as ET
 metrics = lambda f: json.load(open(f))["evaluated"]["metrics"]["locomotion"]

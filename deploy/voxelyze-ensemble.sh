@@ -26,18 +26,11 @@ reader="$(realpath "$1")"; scene="$(realpath "$2")"; resolution="$3"; members="$
   echo "voxelyze-ensemble: $scene must hold exactly one 'phase = ' line (a run's own config.toml)" >&2
   exit 2
 }
-grep -q '^\[scene\.dynamics\.floor\]$' "$scene" || {
-  echo "voxelyze-ensemble: $scene has no [scene.dynamics.floor] table" >&2
-  exit 2
-}
 root="$(cd "$(dirname "$0")/.." && pwd)"
-# The reader's floor is a spring of 2·E·s per voxel (twice ours by default) damped by
-# 2·√(m·E·s): as ours, a stiffness factor of 2 with a contact damping ratio of 1/√2.
-READER_FLOOR_STIFFNESS=2.0
-READER_FLOOR_DAMPING=0.7071067811865476
-worker="${WORKER:-$root/target/release/worker}"
-[ -x "$worker" ] || { echo "voxelyze-ensemble: no worker at $worker (cargo build --release, or set WORKER)" >&2; exit 2; }
-[ -x "$reader" ] || { echo "voxelyze-ensemble: $reader is not an executable" >&2; exit 2; }
+tool=voxelyze-ensemble
+source "$root/deploy/voxelyze-common.sh"
+worker="$(voxelyze_worker "$root" "$reader")"
+require_floor_table "$scene"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 echo "| design | voxels | ours: median x (range), mm | the reader: median x (range), mm | reader ÷ ours (medians) | pairs within ±25 % |"
@@ -49,11 +42,7 @@ for genome in "$@"; do
     dir="$out/$name/$k"
     mkdir -p "$dir"
     phase="$(python3 -c "import math; print(repr(2 * math.pi * $k * 1e-4))")"
-    grep -Ev '^(actuated_contact|friction) = ' "$scene" |
-      sed -e 's/^\[scene\.dynamics\.floor\]$/&\nactuated_contact = true\nfriction = "voxcad"/' \
-          -e "s/^stiffness_factor = .*/stiffness_factor = $READER_FLOOR_STIFFNESS/" \
-          -e "s/^contact = .*/contact = $READER_FLOOR_DAMPING/" \
-          -e "s/^phase = .*/phase = $phase/" > "$dir/scene.toml"
+    reader_floor_scene "$scene" "s/^phase = .*/phase = $phase/" > "$dir/scene.toml"
     # Export once to learn the step the file asks the reader for, then export again from a scene
     # at that step, so that the settle the file carries is the one ours measures.
     "$worker" export --genome "$genome" --scene "$dir/scene.toml" --resolution "$resolution" --out "$dir" > /dev/null
@@ -61,13 +50,7 @@ for genome in "$@"; do
     sed -i "s/^dt_fraction = .*/dt_fraction = $step/" "$dir/scene.toml"
     "$worker" export --genome "$genome" --scene "$dir/scene.toml" --resolution "$resolution" --out "$dir" > /dev/null
     "$worker" evaluate --genome "$genome" --scene "$dir/scene.toml" --resolution "$resolution" > "$dir/ours.json"
-    # The reader's exit status is 1 even when it ran to the end; its result file is the sign.
-    (cd "$dir" && "$reader" -f design.vxa > reader.log 2>&1) || true
-    [ -s "$dir/fitness.xml" ] || {
-      echo "voxelyze-ensemble: the reader wrote no result for $genome (member $k):" >&2
-      tail -5 "$dir/reader.log" >&2
-      exit 1
-    }
+    run_reader "$reader" "$dir" "$genome (member $k)"
     python3 - "$dir/ours.json" "$dir/fitness.xml" >> "$out/$name.pairs" <<'PY'
 import json, sys, xml.etree.ElementTree as ET
 ours = json.load(open(sys.argv[1]))["evaluated"]["metrics"]["locomotion"]

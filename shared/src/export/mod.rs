@@ -89,18 +89,15 @@ pub fn write_fabrication_files(
     // Our simulation lowers a body onto its floor; the simulators that read these files drop it
     // from where its grid puts it, so a body whose lowest voxels sit three layers up fell 6 mm,
     // tumbled and walked the other way there (docs/exports.md). They get the body on the floor.
-    let simulated = match &settings {
-        Some(s) if s.scene.floor.is_some() => resting_on_floor(grid),
-        _ => grid.clone(),
-    };
-    let vxa = write_vxa(
-        &VxaDesign {
-            grid: simulated.clone(),
-            palette: palette.clone(),
-            voxel_size,
+    let simulated = VxaDesign {
+        grid: match &settings {
+            Some(s) if s.scene.floor.is_some() => resting_on_floor(grid),
+            _ => grid.clone(),
         },
-        settings.as_ref(),
-    );
+        palette: palette.clone(),
+        voxel_size,
+    };
+    let vxa = write_vxa(&simulated, settings.as_ref());
     std::fs::write(dir.join("design.vxa"), vxa)?;
     written.push(PathBuf::from("design.vxa"));
     // voxcraft-sim's pair for a robot only: the load case's relaxation has not been checked there.
@@ -112,7 +109,7 @@ pub fn write_fabrication_files(
                 "voxcraft/base.vxa",
                 write_voxcraft_base(palette, voxel_size, shared),
             ),
-            ("voxcraft/design.vxd", write_vxd(&simulated)),
+            ("voxcraft/design.vxd", write_vxd(&simulated.grid)),
         ] {
             std::fs::write(dir.join(name), text)?;
             written.push(PathBuf::from(name));
