@@ -5,7 +5,7 @@ use amorph::dynamics::foam_palette;
 use amorph::export::{VxaDesign, read_vxa, write_vxa};
 use amorph::material::{MaterialId, Palette};
 use amorph::task::beam::{BeamScene, NamedProfile};
-use amorph::task::locomotion::{LocomotionMetrics, LocomotionScene};
+use amorph::task::locomotion::{LocomotionMetrics, LocomotionScene, Starts};
 use amorph::task::{SimulatorSettings, Task};
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
@@ -216,6 +216,7 @@ fn a_robots_own_settle_is_written_when_its_outcome_is_known() {
         simulated_time: 0.82,
         settle_time: 0.12,
         centre_of_mass_trace: Vec::new(),
+        start_fitness: Vec::new(),
     };
     let dims = GridDims::new(20, 20, 20);
     let own = scene.simulator_settings(dims, Some(&metrics)).unwrap();
@@ -233,6 +234,43 @@ fn a_robots_own_settle_is_written_when_its_outcome_is_known() {
     }
     let bound = scene.simulator_settings(dims, None).unwrap();
     assert_eq!(bound.settle_time, scene.settle.max_time);
+}
+
+/// With several starts the file runs the scored (median) one: start 2 of three here, whose
+/// actuation phase is two shifts of a period later, so the reader's offset grows by 2·shift.
+#[test]
+fn a_robot_with_several_starts_is_written_in_its_median_starts_phase() {
+    let scene = LocomotionScene {
+        starts: Starts {
+            count: 3,
+            shift: 0.01,
+        },
+        ..LocomotionScene::default()
+    };
+    let metrics = LocomotionMetrics {
+        displacement: 0.01,
+        gait_displacement: 0.004,
+        lateral: 0.0,
+        speed_percent_per_cycle: 2.0,
+        body_length: 0.02,
+        voxels: 2,
+        material_counts: vec![1, 1],
+        steps: 1000,
+        dt: 1e-5,
+        simulated_time: 0.82,
+        settle_time: 0.12,
+        centre_of_mass_trace: Vec::new(),
+        start_fitness: vec![0.009, -0.002, 0.004],
+    };
+    let own = scene
+        .simulator_settings(GridDims::new(20, 20, 20), Some(&metrics))
+        .unwrap();
+    let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
+    let doc_text = write_vxa(&d, Some(&own));
+    let doc = roxmltree::Document::parse(&doc_text).unwrap();
+    for phi in phase_offsets(&doc) {
+        assert!((phi - (2.0 - 0.12 / 0.07 + 0.02)).abs() < 1e-12, "{phi}");
+    }
 }
 
 #[test]

@@ -239,6 +239,14 @@ impl Simulation {
         }
     }
 
+    /// Sets the actuation's phase at its start, rad (the scene's `actuation.phase`), e.g. to
+    /// switch a settled body on later in the cycle; a scene without actuation has none to set.
+    pub fn set_actuation_phase(&mut self, phase: f64) {
+        if let Some(actuation) = self.scene.actuation.as_mut() {
+            actuation.phase = phase;
+        }
+    }
+
     /// Holds voxel `i` in place (position and orientation), like a clamp.
     pub fn fix_voxel(&mut self, i: usize) -> Result<()> {
         self.check_index(i)?;

@@ -4,6 +4,7 @@
 mod protocol;
 mod report;
 mod scene;
+mod starts;
 
 use std::path::Path;
 
@@ -13,6 +14,7 @@ pub use protocol::{
 };
 pub use report::PAPER_SPEED_PERCENT_PER_CYCLE;
 pub use scene::{LocomotionMetrics, LocomotionScene};
+pub use starts::Starts;
 
 use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
 use crate::export::Block;
@@ -81,6 +83,7 @@ impl Task for LocomotionScene {
                     simulated_time: result.simulated_time,
                     settle_time: result.settle_time,
                     centre_of_mass_trace: result.centre_of_mass_trace,
+                    start_fitness: result.start_fitness,
                 };
                 TaskOutcome::evaluated(result.fitness, metrics)
             }
@@ -146,8 +149,15 @@ impl Task for LocomotionScene {
         dims: GridDims,
         metrics: Option<&LocomotionMetrics>,
     ) -> Option<SimulatorSettings> {
+        let mut scene = self.dynamics_at(dims);
+        // The files run the start whose gait is the fitness.
+        if let (Some(m), Some(actuation)) = (metrics, scene.actuation.as_mut())
+            && !m.start_fitness.is_empty()
+        {
+            actuation.phase += self.starts.phase(Starts::median_start(&m.start_fitness));
+        }
         Some(SimulatorSettings {
-            scene: self.dynamics_at(dims),
+            scene,
             settle_time: metrics.map_or(self.settle.max_time, |m| m.settle_time),
             cycles: self.actuation_cycles,
             load_case: None,

@@ -4,7 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::dynamics::{DivergenceReason, DynamicScene, Simulation, Vec3};
+use super::starts::Starts;
+use crate::dynamics::{Divergence, DivergenceReason, DynamicScene, Simulation, Vec3};
 use crate::material::Palette;
 use crate::task::SceneError;
 use crate::task::error::positive;
@@ -22,6 +23,8 @@ pub struct LocomotionProtocol {
     pub fitness: LocomotionFitness,
     /// The direction travel is scored along, rad from +X towards +Y. Default 0 (+X).
     pub heading: f64,
+    /// How many times the settled body is switched on; the median start is scored.
+    pub starts: Starts,
 }
 
 impl Default for LocomotionProtocol {
@@ -31,6 +34,7 @@ impl Default for LocomotionProtocol {
             actuation_cycles: 10,
             fitness: LocomotionFitness::default(),
             heading: 0.0,
+            starts: Starts::default(),
         }
     }
 }
@@ -62,6 +66,7 @@ impl LocomotionProtocol {
                 ),
             ));
         }
+        self.starts.validate()?;
         if self.actuation_cycles == 0 {
             return Err(SceneError::new(
                 "actuation_cycles",
@@ -205,6 +210,9 @@ pub struct LocomotionOutcome {
     pub dt: f64,
     /// Centre of mass at the end of settling and after each actuation cycle, m.
     pub centre_of_mass_trace: Vec<[f64; 3]>,
+    /// With several starts, each start's fitness in start order (m); the other fields describe
+    /// the median start. Empty for a single start.
+    pub start_fitness: Vec<f64>,
 }
 
 impl LocomotionOutcome {
@@ -222,6 +230,7 @@ impl LocomotionOutcome {
             settle_time: 0.0,
             dt: 0.0,
             centre_of_mass_trace: Vec::new(),
+            start_fitness: Vec::new(),
         }
     }
 
@@ -250,14 +259,14 @@ pub fn simulate_locomotion(
     scene: &DynamicScene,
     protocol: &LocomotionProtocol,
 ) -> LocomotionOutcome {
-    simulate_locomotion_observed(grid, palette, scene, protocol, 1, &mut |_, _| {})
+    evaluate(grid, palette, scene, protocol, None)
 }
 
 /// [`simulate_locomotion`] that also hands the simulation to `observer` at every settling check
 /// and `samples_per_cycle` times per actuation cycle (evenly in steps), for recordings such as a
 /// dense centre-of-mass trace or animation frames. The observer runs between chunks of steps,
 /// never inside the step loop, and the chunks add up to the same steps, so the outcome is bit
-/// for bit that of [`simulate_locomotion`].
+/// for bit that of [`simulate_locomotion`]. With several starts it sees the median start's cycles.
 pub fn simulate_locomotion_observed(
     grid: &VoxelGrid,
     palette: &Palette,
@@ -265,6 +274,32 @@ pub fn simulate_locomotion_observed(
     protocol: &LocomotionProtocol,
     samples_per_cycle: u32,
     observer: &mut dyn FnMut(LocomotionPhase, &Simulation),
+) -> LocomotionOutcome {
+    let observer = Observer {
+        samples_per_cycle: samples_per_cycle.max(1),
+        call: observer,
+    };
+    evaluate(grid, palette, scene, protocol, Some(observer))
+}
+
+/// Who watches a simulation, and how often per cycle.
+struct Observer<'a> {
+    samples_per_cycle: u32,
+    call: &'a mut dyn FnMut(LocomotionPhase, &Simulation),
+}
+
+fn notify(observer: &mut Option<Observer>, phase: LocomotionPhase, sim: &Simulation) {
+    if let Some(o) = observer {
+        (o.call)(phase, sim);
+    }
+}
+
+fn evaluate(
+    grid: &VoxelGrid,
+    palette: &Palette,
+    scene: &DynamicScene,
+    protocol: &LocomotionProtocol,
+    observer: Option<Observer>,
 ) -> LocomotionOutcome {
     let body = keep_largest_component(grid);
     let voxel_count = body.filled_count();
@@ -288,14 +323,7 @@ pub fn simulate_locomotion_observed(
         dt: sim.dt(),
         ..LocomotionOutcome::failed(LocomotionStatus::Completed, voxel_count)
     };
-    let result = run(
-        &mut sim,
-        scene,
-        protocol,
-        samples_per_cycle.max(1),
-        observer,
-        &mut outcome,
-    );
+    let result = run(&mut sim, scene, protocol, observer, &mut outcome);
     outcome.steps = sim.steps();
     outcome.simulated_time = sim.time();
     if let Err(d) = result {
@@ -307,6 +335,7 @@ pub fn simulate_locomotion_observed(
         outcome.displacement = 0.0;
         outcome.lateral = 0.0;
         outcome.speed_percent_per_cycle = 0.0;
+        outcome.start_fitness.clear();
     }
     outcome
 }
@@ -330,15 +359,71 @@ fn body_length(cells: &[[u16; 3]], voxel_size: f64, heading: f64) -> f64 {
     (hi - lo + c.abs() + s.abs()) * voxel_size
 }
 
+fn to_array(c: Vec3) -> [f64; 3] {
+    [c.x, c.y, c.z]
+}
+
+/// Settles, then actuates (once per start), then scores; `sim` ends as the scored start's.
 fn run(
     sim: &mut Simulation,
     scene: &DynamicScene,
     protocol: &LocomotionProtocol,
-    samples_per_cycle: u32,
-    observer: &mut dyn FnMut(LocomotionPhase, &Simulation),
+    mut observer: Option<Observer>,
     outcome: &mut LocomotionOutcome,
-) -> Result<(), crate::dynamics::Divergence> {
-    let rule = &protocol.settle;
+) -> Result<(), Divergence> {
+    settle(sim, scene, &protocol.settle, &mut observer)?;
+    outcome.settle_time = sim.time();
+    outcome
+        .centre_of_mass_trace
+        .push(to_array(sim.centre_of_mass()));
+    if let Some(actuation) = &scene.actuation {
+        let starts = &protocol.starts;
+        if starts.count <= 1 {
+            actuate(
+                sim,
+                protocol,
+                &mut observer,
+                &mut outcome.centre_of_mass_trace,
+            )?;
+        } else {
+            // Every start leaves from the same settled state: the settle is paid once.
+            let settled = sim.clone();
+            let start = |k: usize| {
+                let mut s = settled.clone();
+                s.set_actuation_phase(actuation.phase + starts.phase(k));
+                s
+            };
+            let mut runs = Vec::with_capacity(starts.count as usize);
+            for k in 0..starts.count as usize {
+                let (mut s, mut trace) = (start(k), outcome.centre_of_mass_trace.clone());
+                actuate(&mut s, protocol, &mut None, &mut trace)?;
+                runs.push((s, trace));
+            }
+            outcome.start_fitness = runs.iter().map(|(_, t)| protocol.score(t)).collect();
+            let median = Starts::median_start(&outcome.start_fitness);
+            if observer.is_some() {
+                // The same start again, watched: the same steps give the same bits.
+                let mut trace = outcome.centre_of_mass_trace.clone();
+                actuate(&mut start(median), protocol, &mut observer, &mut trace)?;
+            }
+            (*sim, outcome.centre_of_mass_trace) = runs.swap_remove(median);
+        }
+    }
+    let trace = &outcome.centre_of_mass_trace;
+    (outcome.displacement, outcome.lateral) = protocol.travel(trace[0], trace[trace.len() - 1]);
+    outcome.fitness = protocol.score(trace);
+    outcome.speed_percent_per_cycle =
+        protocol.speed_percent_per_cycle(outcome.fitness, outcome.body_length);
+    Ok(())
+}
+
+/// Lets the body fall and come to rest under gravity, as `rule` says.
+fn settle(
+    sim: &mut Simulation,
+    scene: &DynamicScene,
+    rule: &SettleRule,
+    observer: &mut Option<Observer>,
+) -> Result<(), Divergence> {
     let validated = "settle.damping and dynamics.damping.global are validated with the scene";
     if let Some(zeta) = rule.damping {
         sim.set_global_damping(zeta).expect(validated);
@@ -346,7 +431,7 @@ fn run(
     while sim.time() < rule.max_time {
         let chunk = rule.check_interval.min(rule.max_time - sim.time());
         sim.run_for(chunk)?;
-        observer(LocomotionPhase::Settling, sim);
+        notify(observer, LocomotionPhase::Settling, sim);
         if rule.still_speed > 0.0 && sim.max_speed() < rule.still_speed {
             break;
         }
@@ -355,34 +440,36 @@ fn run(
         sim.set_global_damping(scene.damping.global)
             .expect(validated);
     }
-    observer(LocomotionPhase::Settled, sim);
-    outcome.settle_time = sim.time();
-    let start = sim.centre_of_mass();
-    let to_array = |c: Vec3| [c.x, c.y, c.z];
-    outcome.centre_of_mass_trace.push(to_array(start));
-    if let Some(actuation) = &scene.actuation {
-        sim.start_actuation();
-        let steps_per_cycle = (actuation.period / sim.dt()).round().max(1.0) as u64;
-        let samples = u64::from(samples_per_cycle);
-        for cycle in 0..protocol.actuation_cycles {
-            // Sample k ends at step round(k · steps / samples) of the cycle.
-            let mut done = 0;
-            for sample in 1..=samples_per_cycle {
-                let end = (u64::from(sample) * steps_per_cycle + samples / 2) / samples;
-                sim.run_steps(end - done)?;
-                done = end;
-                observer(LocomotionPhase::Actuating { cycle, sample }, sim);
-            }
-            outcome
-                .centre_of_mass_trace
-                .push(to_array(sim.centre_of_mass()));
+    notify(observer, LocomotionPhase::Settled, sim);
+    Ok(())
+}
+
+/// Switches the actuation on and runs the protocol's cycles, appending the centre of mass after
+/// each to `trace`.
+fn actuate(
+    sim: &mut Simulation,
+    protocol: &LocomotionProtocol,
+    observer: &mut Option<Observer>,
+    trace: &mut Vec<[f64; 3]>,
+) -> Result<(), Divergence> {
+    let Some(actuation) = sim.scene().actuation.clone() else {
+        return Ok(());
+    };
+    sim.start_actuation();
+    let steps_per_cycle = (actuation.period / sim.dt()).round().max(1.0) as u64;
+    let samples_per_cycle = observer.as_ref().map_or(1, |o| o.samples_per_cycle);
+    let samples = u64::from(samples_per_cycle);
+    for cycle in 0..protocol.actuation_cycles {
+        // Sample k ends at step round(k · steps / samples) of the cycle.
+        let mut done = 0;
+        for sample in 1..=samples_per_cycle {
+            let end = (u64::from(sample) * steps_per_cycle + samples / 2) / samples;
+            sim.run_steps(end - done)?;
+            done = end;
+            notify(observer, LocomotionPhase::Actuating { cycle, sample }, sim);
         }
+        trace.push(to_array(sim.centre_of_mass()));
     }
-    let end = sim.centre_of_mass();
-    (outcome.displacement, outcome.lateral) = protocol.travel(to_array(start), to_array(end));
-    outcome.fitness = protocol.score(&outcome.centre_of_mass_trace);
-    outcome.speed_percent_per_cycle =
-        protocol.speed_percent_per_cycle(outcome.fitness, outcome.body_length);
     Ok(())
 }
 

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use super::scene::{LocomotionMetrics, LocomotionScene};
+use super::starts::Starts;
 use crate::export::{
     AnimationOptions, Block, RecordingOptions, trajectory_csv, trajectory_plot,
     write_locomotion_animation,
@@ -31,6 +32,8 @@ pub(super) fn summary(scene: &LocomotionScene, m: Option<&LocomotionMetrics>) ->
         "voxels": m.map(|m| m.voxels),
         "material_counts": m.map(|m| m.material_counts.clone()),
         "centre_of_mass_trace": m.map(|m| m.centre_of_mass_trace.clone()),
+        "starts": scene.starts.count,
+        "start_fitness_m": m.map(|m| m.start_fitness.clone()),
     })
 }
 
@@ -84,12 +87,30 @@ pub(super) fn table(
             "0°, 0°",
         ));
     }
+    rows.extend([row(
+        "gait travel (fitness: median cycle × cycles)",
+        num(m.map(|m| 1e3 * m.gait_displacement), 3, " mm"),
+        "-",
+    )]);
+    if scene.starts.count > 1 {
+        let spread = m.map_or("-".into(), |m| {
+            let mm: Vec<String> = m
+                .start_fitness
+                .iter()
+                .map(|f| format!("{:.3}", 1e3 * f))
+                .collect();
+            format!("{} mm (median scored)", mm.join(", "))
+        });
+        rows.push(row(
+            &format!(
+                "gait of each start ({} starts, {} period apart)",
+                scene.starts.count, scene.starts.shift
+            ),
+            spread,
+            "one start",
+        ));
+    }
     rows.extend([
-        row(
-            "gait travel (fitness: median cycle × cycles)",
-            num(m.map(|m| 1e3 * m.gait_displacement), 3, " mm"),
-            "-",
-        ),
         row(
             "total travel of the centre of mass",
             num(m.map(|m| 1e3 * m.displacement), 3, " mm"),
@@ -235,11 +256,56 @@ pub(super) fn check_metrics(
             m.gait_displacement
         ));
     }
+    check_starts(
+        scene,
+        m,
+        gait,
+        2.0 * reach * f64::from(scene.actuation_cycles),
+    )?;
     let speed = protocol.speed_percent_per_cycle(gait, m.body_length);
     if speed.to_bits() != m.speed_percent_per_cycle.to_bits() {
         return Err(format!(
             "speed_percent_per_cycle {} differs from {speed}",
             m.speed_percent_per_cycle
+        ));
+    }
+    Ok(())
+}
+
+/// A peer's starts: one fitness per start, each within what the steps can travel, and the
+/// scored start's gait their median.
+fn check_starts(
+    scene: &LocomotionScene,
+    m: &LocomotionMetrics,
+    gait: f64,
+    reach: f64,
+) -> Result<(), String> {
+    let starts = scene.starts.count as usize;
+    let expected = if starts > 1 { starts } else { 0 };
+    if m.start_fitness.len() != expected {
+        return Err(format!(
+            "start_fitness has {} values, expected {expected} (one per start of {starts}, none \
+             for a single start)",
+            m.start_fitness.len()
+        ));
+    }
+    if m.start_fitness.is_empty() {
+        return Ok(());
+    }
+    if let Some(f) = m
+        .start_fitness
+        .iter()
+        .find(|f| !(f.is_finite() && f.abs() <= reach))
+    {
+        return Err(format!(
+            "start_fitness value {f} is beyond what {} steps can reach",
+            m.steps
+        ));
+    }
+    let median = m.start_fitness[Starts::median_start(&m.start_fitness)];
+    if median.to_bits() != gait.to_bits() {
+        return Err(format!(
+            "the median of start_fitness, {median}, is not the scored start's gait {gait}"
         ));
     }
     Ok(())

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::protocol::{LocomotionFitness, LocomotionProtocol, SettleRule};
+use super::starts::Starts;
 use crate::dynamics::{DynamicScene, foam_palette};
 use crate::genome::GenomeLimits;
 use crate::material::Palette;
@@ -38,6 +39,9 @@ pub struct LocomotionScene {
     pub actuation_cycles: u32,
     /// How the centre of mass's travel becomes the fitness (default: the steady gait).
     pub fitness: LocomotionFitness,
+    /// How many times the settled body is switched on, each a fraction of a period later; the
+    /// median start is the fitness (default: one start, the paper's protocol).
+    pub starts: Starts,
     /// The physics: floor, gravity, actuation, damping, time step (default: the paper's).
     /// `voxel_size` follows `workspace` and the floor's incline follows `incline_degrees`.
     /// A `[scene.dynamics]` table changes only the keys it names: the rest stay the paper's, the
@@ -72,6 +76,7 @@ impl Default for LocomotionScene {
             settle: protocol.settle,
             actuation_cycles: protocol.actuation_cycles,
             fitness: protocol.fitness,
+            starts: protocol.starts,
             dynamics: DynamicScene::paper_locomotion(),
         }
     }
@@ -125,6 +130,7 @@ impl LocomotionScene {
             actuation_cycles: self.actuation_cycles,
             fitness: self.fitness,
             heading: self.heading_degrees.to_radians(),
+            starts: self.starts.clone(),
         }
     }
 
@@ -172,4 +178,8 @@ pub struct LocomotionMetrics {
     pub settle_time: f64,
     /// Centre of mass after settling and after each cycle, m.
     pub centre_of_mass_trace: Vec<[f64; 3]>,
+    /// With several starts, each start's fitness in start order, m; the fields above describe
+    /// the median start. Empty for one start.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub start_fitness: Vec<f64>,
 }
