@@ -6,34 +6,12 @@ use amorph::export::{
     AnimationOptions, RecordingOptions, animation_gif, record_locomotion, trajectory_csv,
     trajectory_plot,
 };
-use amorph::genome::{GaussianPoint, Genome};
-use amorph::material::MaterialId;
 use amorph::task::locomotion::{
-    LocomotionPhase, LocomotionScene, simulate_locomotion, simulate_locomotion_observed,
+    LocomotionPhase, simulate_locomotion, simulate_locomotion_observed,
 };
-use amorph::voxel::GridDims;
 
-/// A short walk of a two-material 6×6×6 body: passive at −x, actuated at +x. Settling and cycles
-/// are short so the test takes well under a second; the pictures need motion, not the gait.
-fn walker() -> (Genome, LocomotionScene, GridDims) {
-    let blob = |x: f64, material: u8| GaussianPoint {
-        position: [x, 0.5, 0.3],
-        density: 1.0,
-        falloff: 0.2,
-        material: MaterialId(material),
-    };
-    let genome = Genome::new(vec![blob(0.3, 0), blob(0.7, 1)]);
-    let mut scene = LocomotionScene {
-        workspace: 0.008,
-        ..LocomotionScene::default()
-    };
-    scene.actuation_cycles = 3;
-    scene.settle.max_time = 0.02;
-    if let Some(a) = scene.dynamics.actuation.as_mut() {
-        a.period = 0.02;
-    }
-    (genome, scene, GridDims::new(6, 6, 6))
-}
+mod common;
+use common::short_walker as walker;
 
 #[test]
 fn observing_a_walk_leaves_it_bit_identical() {

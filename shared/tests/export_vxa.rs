@@ -197,17 +197,13 @@ fn phase_offsets(doc: &roxmltree::Document) -> Vec<f64> {
         .collect()
 }
 
-/// With the design's outcome, the settle written is the one its evaluation measured (0.12 s),
-/// and the phase offset starts the reader's sine there: 0.12 s is 1.714 periods of 0.07 s, so
-/// the offset is 0.286 of a period; the reader starts actuating when ours did, in the same phase.
-#[test]
-fn a_robots_own_settle_is_written_when_its_outcome_is_known() {
-    let scene = LocomotionScene::default();
-    let metrics = LocomotionMetrics {
+/// A robot's outcome as a file needs it: settled after 0.12 s, its gait, and its starts' gaits.
+fn settled_at_0_12_s(gait: f64, start_fitness: Vec<f64>) -> LocomotionMetrics {
+    LocomotionMetrics {
         displacement: 0.01,
-        gait_displacement: 0.01,
+        gait_displacement: gait,
         lateral: 0.0,
-        speed_percent_per_cycle: 5.0,
+        speed_percent_per_cycle: 100.0 * gait / 0.02 / 10.0,
         body_length: 0.02,
         voxels: 2,
         material_counts: vec![1, 1],
@@ -216,8 +212,17 @@ fn a_robots_own_settle_is_written_when_its_outcome_is_known() {
         simulated_time: 0.82,
         settle_time: 0.12,
         centre_of_mass_trace: Vec::new(),
-        start_fitness: Vec::new(),
-    };
+        start_fitness,
+    }
+}
+
+/// With the design's outcome, the settle written is the one its evaluation measured (0.12 s),
+/// and the phase offset starts the reader's sine there: 0.12 s is 1.714 periods of 0.07 s, so
+/// the offset is 0.286 of a period; the reader starts actuating when ours did, in the same phase.
+#[test]
+fn a_robots_own_settle_is_written_when_its_outcome_is_known() {
+    let scene = LocomotionScene::default();
+    let metrics = settled_at_0_12_s(0.01, Vec::new());
     let dims = GridDims::new(20, 20, 20);
     let own = scene.simulator_settings(dims, Some(&metrics)).unwrap();
     let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
@@ -247,21 +252,7 @@ fn a_robot_with_several_starts_is_written_in_its_median_starts_phase() {
         },
         ..LocomotionScene::default()
     };
-    let metrics = LocomotionMetrics {
-        displacement: 0.01,
-        gait_displacement: 0.004,
-        lateral: 0.0,
-        speed_percent_per_cycle: 2.0,
-        body_length: 0.02,
-        voxels: 2,
-        material_counts: vec![1, 1],
-        steps: 1000,
-        dt: 1e-5,
-        simulated_time: 0.82,
-        settle_time: 0.12,
-        centre_of_mass_trace: Vec::new(),
-        start_fitness: vec![0.009, -0.002, 0.004],
-    };
+    let metrics = settled_at_0_12_s(0.004, vec![0.009, -0.002, 0.004]);
     let own = scene
         .simulator_settings(GridDims::new(20, 20, 20), Some(&metrics))
         .unwrap();

@@ -3,8 +3,6 @@
 //! every reported field are the median start's, watching it changes nothing, and a peer's claimed
 //! starts are checked.
 
-use amorph::genome::{GaussianPoint, Genome};
-use amorph::material::MaterialId;
 use amorph::task::Task;
 use amorph::task::locomotion::{
     LocomotionMetrics, LocomotionOutcome, LocomotionPhase, LocomotionScene, LocomotionStatus,
@@ -12,30 +10,19 @@ use amorph::task::locomotion::{
 };
 use amorph::voxel::{GridDims, VoxelGrid};
 
-/// A short walk of a two-material 6×6×6 body (passive at −x, actuated at +x), switched on three
-/// times a tenth of a period apart, far enough for three different gaits.
+mod common;
+
+/// The short walker of the export tests, switched on three times a tenth of a period apart, far
+/// enough for three different gaits.
 fn walker() -> (VoxelGrid, LocomotionScene, GridDims) {
-    let blob = |x: f64, material: u8| GaussianPoint {
-        position: [x, 0.5, 0.3],
-        density: 1.0,
-        falloff: 0.2,
-        material: MaterialId(material),
-    };
-    let genome = Genome::new(vec![blob(0.3, 0), blob(0.7, 1)]);
-    let mut scene = LocomotionScene {
-        workspace: 0.008,
+    let (genome, scene, dims) = common::short_walker();
+    let scene = LocomotionScene {
         starts: Starts {
             count: 3,
             shift: 0.1,
         },
-        ..LocomotionScene::default()
+        ..scene
     };
-    scene.actuation_cycles = 3;
-    scene.settle.max_time = 0.02;
-    if let Some(a) = scene.dynamics.actuation.as_mut() {
-        a.period = 0.02;
-    }
-    let dims = GridDims::new(6, 6, 6);
     (amorph::task::design(&scene, &genome, dims), scene, dims)
 }
 
