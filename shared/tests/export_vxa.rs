@@ -2,7 +2,7 @@
 //! in the file, and malformed files are refused with the element named.
 
 use amorph::dynamics::foam_palette;
-use amorph::export::{VxaDesign, read_vxa, write_vxa};
+use amorph::export::{VxaDesign, read_vxa, write_voxcraft_base, write_vxa};
 use amorph::material::{MaterialId, Palette};
 use amorph::task::beam::{BeamScene, NamedProfile};
 use amorph::task::locomotion::{LocomotionMetrics, LocomotionScene, Starts};
@@ -335,4 +335,41 @@ fn a_robot_is_written_resting_on_the_floor() {
     let back = read_vxa(&std::fs::read_to_string(beam_dir.join("design.vxa")).unwrap()).unwrap();
     std::fs::remove_dir_all(&beam_dir).unwrap();
     assert_eq!(back.grid, beam_grid);
+}
+
+/// Both readers (this VXA's and voxcraft-sim's base) damp the floor by ColDampingZ·2√(m·E·s)
+/// whatever their floor spring; ours by 2ζ√(m·k) with k = `stiffness_factor`·E·s. The files must
+/// carry our damping constant: ζ at our default spring, ζ·√factor at any other (session 17 found
+/// the reader-floor check writing ζ = 1/√2 at factor 2, a floor damped √2 less than ours).
+#[test]
+fn the_floor_is_damped_as_ours_whatever_our_floor_spring() {
+    for (factor, zeta, expected) in [
+        (1.0, 1.0, 1.0),
+        (1.0, 0.3, 0.3),
+        (2.0, std::f64::consts::FRAC_1_SQRT_2, 1.0),
+        (4.0, 0.5, 1.0),
+    ] {
+        let mut settings = robot_settings().unwrap();
+        settings.scene.damping.contact = zeta;
+        settings.scene.floor.as_mut().unwrap().stiffness_factor = factor;
+        let d = design(&[1, 2], GridDims::new(2, 1, 1), foam_palette());
+        let texts = [
+            write_vxa(&d, Some(&settings)),
+            write_voxcraft_base(&d.palette, d.voxel_size, &settings),
+        ];
+        for text in texts {
+            let doc = roxmltree::Document::parse(&text).unwrap();
+            let z: f64 = doc
+                .descendants()
+                .find(|n| n.has_tag_name("ColDampingZ"))
+                .and_then(|n| n.text())
+                .unwrap()
+                .parse()
+                .unwrap();
+            assert!(
+                (z - expected).abs() < 1e-12,
+                "factor {factor}, ζ {zeta}: ColDampingZ {z}"
+            );
+        }
+    }
 }

@@ -17,7 +17,7 @@
 use std::fmt::Write;
 
 use super::vxa::{
-    READER_MAX_DT_FRACTION, bond_damping_z, edge_stroke, per_voxel_layers,
+    READER_MAX_DT_FRACTION, bond_damping_z, collision_damping_z, edge_stroke, per_voxel_layers,
     whole_period_settle_and_stop, write_lattice, write_palette, write_structure,
 };
 use crate::material::Palette;
@@ -52,7 +52,7 @@ pub fn write_voxcraft_base(
         "<Simulator><Integration><Integrator>0</Integrator><DtFrac>{}</DtFrac></Integration><Damping><BondDampingZ>{}</BondDampingZ><ColDampingZ>{}</ColDampingZ><SlowDampingZ>{}</SlowDampingZ></Damping><AttachDetach><EnableCollision>{}</EnableCollision><EnableAttach>0</EnableAttach><EnableDetach>0</EnableDetach></AttachDetach><StopCondition><StopConditionFormula><mtSUB><mtVAR>t</mtVAR><mtCONST>{stop}</mtCONST></mtSUB></StopConditionFormula></StopCondition><RecordHistory><RecordStepSize>0</RecordStepSize><RecordVoxel>0</RecordVoxel><RecordLink>0</RecordLink></RecordHistory><FitnessFunction><mtVAR>x</mtVAR></FitnessFunction><Features><VolumeEffectsEnabled>{}</VolumeEffectsEnabled></Features><EnableExpansion>1</EnableExpansion><SecondaryExperiment>1</SecondaryExperiment><ReinitializeInitialPositionAfterThisManySeconds>{settle}</ReinitializeInitialPositionAfterThisManySeconds></Simulator>",
         scene.dt_fraction.min(READER_MAX_DT_FRACTION),
         bond_damping_z(d.link),
-        d.contact,
+        collision_damping_z(scene),
         d.global,
         u8::from(scene.collisions),
         u8::from(scene.poisson),

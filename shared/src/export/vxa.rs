@@ -13,7 +13,7 @@
 
 use std::fmt::Write;
 
-use crate::dynamics::TOP_EIGENVALUE;
+use crate::dynamics::{DynamicScene, TOP_EIGENVALUE};
 use crate::material::{Material, MaterialId, Palette};
 use crate::task::{LayerLoadCase, SimulatorSettings};
 use crate::voxel::{GridDims, VoxelGrid};
@@ -208,6 +208,15 @@ pub(super) fn bond_damping_z(link: f64) -> f64 {
     2.0 * link / TOP_EIGENVALUE.sqrt()
 }
 
+/// The reader's collision damping ratio for our floor contact. Readers of this family damp the
+/// floor by ζ_v·2√(m·E·s) whatever their floor spring (2·E·s); ours by 2ζ·√(m·k) with our spring
+/// k = `stiffness_factor`·E·s. So the same damping constant is ζ·√`stiffness_factor` there (ζ itself
+/// at our default factor 1). Voxel-to-voxel collisions use the same ratio in those readers.
+pub(super) fn collision_damping_z(scene: &DynamicScene) -> f64 {
+    let factor = scene.floor.as_ref().map_or(1.0, |f| f.stiffness_factor);
+    scene.damping.contact * factor.sqrt()
+}
+
 /// Kinetic energy, as a part of the least strain energy the load case stores, below which the
 /// reader's relaxation counts as rest: the displacement left is then about √ of it (1e-4).
 const REST_ENERGY_FRACTION: f64 = 1e-8;
@@ -232,7 +241,7 @@ fn write_simulator(w: &mut String, settings: &SimulatorSettings, voxels: usize) 
         "<Simulator><Integration><Integrator>0</Integrator><DtFrac>{}</DtFrac></Integration><Damping><BondDampingZ>{}</BondDampingZ><ColDampingZ>{}</ColDampingZ><SlowDampingZ>{}</SlowDampingZ></Damping><Collisions><SelfColEnabled>{}</SelfColEnabled><ColSystem>3</ColSystem><CollisionHorizon>3</CollisionHorizon></Collisions><Features><FluidDampEnabled>0</FluidDampEnabled><PoissonKickBackEnabled>0</PoissonKickBackEnabled><EnforceLatticeEnabled>0</EnforceLatticeEnabled></Features><StopCondition><StopConditionType>{stop_type}</StopConditionType><StopConditionValue>{stop_value:e}</StopConditionValue><InitCmTime>{settle}</InitCmTime></StopCondition><EquilibriumMode><EquilibriumModeEnabled>{equilibrium}</EquilibriumModeEnabled></EquilibriumMode><GA><FitnessFileName>fitness.xml</FitnessFileName></GA></Simulator>",
         scene.dt_fraction.min(READER_MAX_DT_FRACTION),
         bond_damping_z(d.link),
-        d.contact,
+        collision_damping_z(scene),
         d.global,
         u8::from(scene.collisions),
     );
