@@ -42,7 +42,10 @@ for genome in "$@"; do
     dir="$out/$name/$k"
     mkdir -p "$dir"
     phase="$(python3 -c "import math; print(repr(2 * math.pi * $k * 1e-4))")"
-    reader_floor_scene "$scene" "s/^phase = .*/phase = $phase/" > "$dir/scene.toml"
+    # One start per member: the ensemble is itself the comparison over starts, and a member's file
+    # runs one start in the reader ([scene.starts] count, if the run used several).
+    reader_floor_scene "$scene" "s/^phase = .*/phase = $phase/" \
+      '/^\[scene\.starts\]$/,/^\[/ s/^count = .*/count = 1/' > "$dir/scene.toml"
     # Export once to learn the step the file asks the reader for, then export again from a scene
     # at that step, so that the settle the file carries is the one ours measures.
     "$worker" export --genome "$genome" --scene "$dir/scene.toml" --resolution "$resolution" --out "$dir" > /dev/null
