@@ -87,11 +87,11 @@ pub(super) fn table(
             "0°, 0°",
         ));
     }
-    rows.extend([row(
+    rows.push(row(
         "gait travel (fitness: median cycle × cycles)",
         num(m.map(|m| 1e3 * m.gait_displacement), 3, " mm"),
         "-",
-    )]);
+    ));
     if scene.starts.count > 1 {
         let spread = m.map_or("-".into(), |m| {
             let mm: Vec<String> = m
