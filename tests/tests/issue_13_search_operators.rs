@@ -4,9 +4,13 @@
 //! island's best; `diversity.csv` records every island after every epoch.
 
 use amorph::genome::Genome;
-use amorph_coordinator::RunConfig;
-use amorph_tests::{run_locally, scratch_dir};
+use amorph_coordinator::progress::Progress;
+use amorph_coordinator::store::RunStore;
+use amorph_coordinator::{LocalEvaluator, RunConfig, RunContext, run};
+use amorph_tests::{fingerprint, run_locally, scratch_dir};
 use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 fn config(results_dir: &Path, seed: u64, local_search: &str) -> RunConfig {
     let text = format!(
@@ -175,4 +179,129 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
             .filter(|r| r[0] == last_epoch)
             .any(|r| r[4] == 0.0 && r[6] == 0.0)
     );
+}
+
+fn merging_config(results_dir: &Path, evaluations: u64) -> RunConfig {
+    let text = format!(
+        r#"
+name = "merging"
+seed = 11
+results_dir = "{dir}"
+[search]
+population = 8
+islands = 3
+children_per_epoch = 4
+initial_points = 20
+[search.local_search]
+fraction = 0.5
+step = 0.02
+shared = true
+[budget]
+evaluations = {evaluations}
+[resolution]
+levels = [[3, 9, 3], [4, 12, 4]]
+stall_epochs = 1000
+latest_switch = [100]
+merge_islands = true
+[cluster]
+local_workers = 0
+[scene]
+kind = "beam"
+target = "circular_arc"
+"#,
+        dir = results_dir.display()
+    );
+    RunConfig::parse(&text, Path::new("merging.toml")).expect("valid test config")
+}
+
+/// `resolution.merge_islands`: at the switch the three islands become one, carrying each
+/// island's best into the finer grid (8 re-evaluations, not 3 × 8) and breeding all 3 × 4
+/// children per epoch from then on; the run is bit-identical on 1 and 3 threads and when
+/// interrupted after the merge and resumed (the replay retraces the merge).
+#[test]
+fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
+    let dirs = [
+        scratch_dir("merge-1"),
+        scratch_dir("merge-3"),
+        scratch_dir("merge-resumed"),
+    ];
+    let one = run_locally(&merging_config(&dirs[0], 260), 1);
+    let three = run_locally(&merging_config(&dirs[1], 260), 3);
+    assert_eq!(one.evaluations, 260);
+    assert_eq!(one.populations.len(), 1);
+    assert_eq!(fingerprint(&one), fingerprint(&three));
+
+    // Stopped at 140 evaluations (after the merge at 108 + 8), then extended to 260.
+    let first = run_locally(&merging_config(&dirs[2], 140), 1);
+    assert_eq!((first.evaluations, first.populations.len()), (140, 1));
+    let config = merging_config(&dirs[2], 260);
+    let store = RunStore::resume(&config).expect("the stopped run's store");
+    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), 2);
+    let resumed = run(
+        &config,
+        &mut evaluator,
+        &RunContext {
+            store: &store,
+            shutdown: &AtomicBool::new(false),
+            progress: &Progress::hidden(),
+        },
+    )
+    .expect("the resumed run completes");
+    assert_eq!(fingerprint(&resumed), fingerprint(&one));
+
+    let db = rusqlite::Connection::open(merging_config(&dirs[0], 260).run_dir().join("run.sqlite"))
+        .unwrap();
+    let rows = |sql: &str| -> Vec<(i64, i64, String)> {
+        let mut stmt = db.prepare(sql).unwrap();
+        stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
+            .unwrap()
+            .map(Result::unwrap)
+            .collect()
+    };
+    // (epoch, island, genome) of every re-evaluation: one switch, as island 0, a population's worth.
+    let carried =
+        rows("SELECT epoch, island, genome FROM evaluation WHERE purpose = 'reevaluation'");
+    assert_eq!(carried.len(), 8);
+    let switch = carried[0].0;
+    assert!(carried.iter().all(|&(e, i, _)| e == switch && i == 0));
+    // Before the switch (epoch `switch` is the last coarse one) three islands, after it one.
+    let islands_at = |epoch: i64| {
+        db.query_row(
+            "SELECT COUNT(DISTINCT island) FROM population WHERE epoch = ?1",
+            [epoch],
+            |r| r.get::<_, i64>(0),
+        )
+        .unwrap()
+    };
+    assert_eq!((islands_at(switch), islands_at(switch + 1)), (3, 1));
+    // Every island's coarse best went into the merged population.
+    let bests = rows(&format!(
+        "SELECT p.island, p.slot, e.genome FROM population p JOIN evaluation e USING (task_id)
+         WHERE p.epoch = {switch} AND p.fitness = (SELECT MAX(fitness) FROM population q
+         WHERE q.epoch = p.epoch AND q.island = p.island)"
+    ));
+    for island in 0..3 {
+        assert!(
+            bests
+                .iter()
+                .filter(|b| b.0 == island)
+                .any(|b| carried.iter().any(|c| c.2 == b.2)),
+            "island {island}'s best was not carried"
+        );
+    }
+    // The same batch before and after the merge: 3 islands x 4 children, then one island of 12.
+    let totals: Vec<i64> = {
+        let mut stmt = db
+            .prepare("SELECT evaluations FROM epoch ORDER BY epoch")
+            .unwrap();
+        stmt.query_map([], |r| r.get(0))
+            .unwrap()
+            .map(Result::unwrap)
+            .collect()
+    };
+    let steps: Vec<i64> = totals.windows(2).map(|w| w[1] - w[0]).collect();
+    let s = switch as usize;
+    assert!(steps[..s - 1].iter().all(|&d| d == 12), "{steps:?}");
+    assert_eq!(steps[s - 1], 8 + 12, "{steps:?}");
+    assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
 }

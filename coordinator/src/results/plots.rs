@@ -25,7 +25,12 @@ pub(super) fn write_progress(
     summary: &RunSummary,
     figure: Figure,
 ) -> std::io::Result<()> {
-    let islands = summary.populations.len();
+    // Islands merged at a resolution switch (`resolution.merge_islands`) have lines up to it.
+    let islands = (summary.history.iter())
+        .map(|r| r.island as usize + 1)
+        .max()
+        .unwrap_or(0)
+        .max(summary.populations.len());
     let plot = |x_of: &dyn Fn(&HistoryRow) -> f64, x_label: &str| {
         let series: Vec<Series> = (0..islands)
             .map(|i| Series {

@@ -20,7 +20,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
-    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, migrate,
+    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, merge_order,
+    migrate,
 };
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
@@ -39,6 +40,9 @@ pub(super) struct Search {
     pub(super) replay_until: Option<usize>,
     pub(super) clock: RunClock,
     breeding: Breeding,
+    /// Children each island breeds per epoch: the configured count, times the islands merged
+    /// into one at a resolution switch (`resolution.merge_islands`), so the batch stays the same.
+    children_per_island: usize,
 }
 
 /// Wall time of the run across sessions: what earlier sessions used plus this session's time.
@@ -107,6 +111,7 @@ impl Search {
                 earlier: ctx.store.recorded_wall_seconds()?,
             },
             breeding,
+            children_per_island: raw.search.children_per_epoch,
         };
         let dims = raw.resolution.dims(0);
         let batch = evaluate_all(
@@ -192,7 +197,7 @@ impl Search {
             .enumerate()
             .map(|(i, island)| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
-                let count = (raw.search.children_per_epoch as u64).min(share) as usize;
+                let count = (self.children_per_island as u64).min(share) as usize;
                 island.breed(count, breeding, dims, shared.as_ref().map(|(_, s)| s))
             })
             .collect();
@@ -256,9 +261,10 @@ impl Search {
         migrations
     }
 
-    /// Moves to the next resolution once progress stalls there, re-evaluating every population.
-    /// With less budget left than that re-evaluation, the run ends at the current level rather
-    /// than overshoot its evaluation budget.
+    /// Moves to the next resolution once progress stalls there, re-evaluating every population
+    /// (or, with `resolution.merge_islands`, the islands' best in turn as one population). With
+    /// less budget left than that re-evaluation, the run ends at the current level rather than
+    /// overshoot its evaluation budget.
     pub(super) fn switch_if_stalled(
         &mut self,
         config: &RunConfig,
@@ -266,22 +272,33 @@ impl Search {
         ctx: &RunContext<'_>,
     ) -> Result<()> {
         let schedule = &config.raw.resolution;
-        let population_total: u64 = self.islands.iter().map(|i| i.population.len() as u64).sum();
+        let merge = schedule.merge_islands && self.islands.len() > 1;
+        let carried: Vec<Vec<(usize, usize)>> = if merge {
+            vec![merge_order(&self.islands, config.raw.search.population)]
+        } else {
+            (self.islands.iter().enumerate())
+                .map(|(i, island)| (0..island.population.len()).map(|s| (i, s)).collect())
+                .collect()
+        };
+        let reevaluations: u64 = carried.iter().map(|c| c.len() as u64).sum();
         let switch_affordable = config
             .raw
             .budget
             .evaluations
-            .is_none_or(|max| max.saturating_sub(self.evaluations) >= population_total);
+            .is_none_or(|max| max.saturating_sub(self.evaluations) >= reevaluations);
         let best = self.best().outcome.rank();
         if !(switch_affordable && self.resolution.observe(best, self.evaluations, schedule)) {
             return Ok(());
         }
         let dims = schedule.dims(self.resolution.level);
-        info!(epoch = self.epoch, resolution = %dims, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
-        let genomes: Vec<Vec<Genome>> = self
-            .islands
+        info!(epoch = self.epoch, resolution = %dims, merge, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
+        let genomes: Vec<Vec<Genome>> = carried
             .iter()
-            .map(|i| i.population.iter().map(|ind| ind.genome.clone()).collect())
+            .map(|group| {
+                (group.iter())
+                    .map(|&(i, s)| self.islands[i].population[s].genome.clone())
+                    .collect()
+            })
             .collect();
         let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Reevaluation, ctx)?;
         let outcomes = settle(
@@ -292,6 +309,23 @@ impl Search {
             ctx,
             &verification::all_decide,
         )?;
+        if merge {
+            // The merged island draws from the stream after the islands' own (stream 0 is
+            // migration's, 1..=islands the islands'), so the run stays a function of its seed.
+            let mut rng = ChaCha8Rng::seed_from_u64(config.raw.seed);
+            rng.set_stream(config.raw.search.islands as u64 + 1);
+            let population = (genomes.into_iter().flatten())
+                .zip(outcomes.into_iter().flatten())
+                .map(|(genome, (task, outcome))| Individual {
+                    genome,
+                    outcome,
+                    task,
+                })
+                .collect();
+            self.children_per_island *= self.islands.len();
+            self.islands = vec![Island::from_evaluated(IslandId(0), rng, population)];
+            return Ok(());
+        }
         for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
             for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
                 ind.outcome = outcome;

@@ -4,6 +4,8 @@
 //! fine grid scores far worse: docs/evolution.md, session 9).
 
 use amorph::voxel::GridDims;
+
+use super::island::Island;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -21,6 +23,13 @@ pub struct ResolutionSchedule {
     /// stalled or not. Empty (the default): only the stall rule.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub latest_switch: Vec<u64>,
+    /// At a switch, the islands become one island of `population` and its epochs breed all the
+    /// islands' children: the designs re-evaluated at the finer level are each island's best, then
+    /// each one's second best, and so on, instead of every island's whole population. Default
+    /// false (every island re-evaluated and kept). Many small islands explore the coarse grid
+    /// well but arrive at the fine one barely bred (docs/evolution.md, session 17).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub merge_islands: bool,
 }
 
 fn default_stall_epochs() -> usize {
@@ -37,6 +46,7 @@ impl ResolutionSchedule {
             stall_epochs: default_stall_epochs(),
             min_improvement: default_min_improvement(),
             latest_switch: Vec::new(),
+            merge_islands: false,
         }
     }
 
@@ -125,6 +135,38 @@ impl ResolutionState {
     }
 }
 
+/// The individuals that carry merged islands into the next level, as (island, slot): every
+/// island's best (in island order), then every island's second best, and so on, `count` in all.
+/// Taking ranks in turn rather than the pool's fittest keeps one island's near-copies of its best
+/// from filling the merged population.
+pub fn merge_order(islands: &[Island], count: usize) -> Vec<(usize, usize)> {
+    let ranked: Vec<Vec<usize>> = islands
+        .iter()
+        .map(|island| {
+            let pop = &island.population;
+            let mut order: Vec<usize> = (0..pop.len()).collect();
+            order.sort_by(|&a, &b| {
+                pop[b]
+                    .outcome
+                    .rank()
+                    .total_cmp(&pop[a].outcome.rank())
+                    .then(a.cmp(&b))
+            });
+            order
+        })
+        .collect();
+    let deepest = ranked.iter().map(Vec::len).max().unwrap_or(0);
+    (0..deepest)
+        .flat_map(|rank| {
+            ranked
+                .iter()
+                .enumerate()
+                .filter_map(move |(i, order)| order.get(rank).map(|&slot| (i, slot)))
+        })
+        .take(count)
+        .collect()
+}
+
 impl Default for ResolutionState {
     fn default() -> Self {
         Self::new()
@@ -142,6 +184,7 @@ mod tests {
             stall_epochs: 3,
             min_improvement: 0.1,
             latest_switch: vec![],
+            merge_islands: false,
         };
         let mut s = ResolutionState::new();
         assert!(!s.observe(-10.0, 10, &schedule));
@@ -164,6 +207,7 @@ mod tests {
             stall_epochs: 3,
             min_improvement: 0.01,
             latest_switch: vec![100, 250],
+            merge_islands: false,
         };
         let mut s = ResolutionState::new();
         let mut best = -100.0;
@@ -185,6 +229,7 @@ mod tests {
             stall_epochs: 3,
             min_improvement: 0.01,
             latest_switch,
+            merge_islands: false,
         };
         assert!(schedule(vec![]).validate().is_ok());
         assert!(schedule(vec![100, 200]).validate().is_ok());
@@ -195,5 +240,33 @@ mod tests {
             err.starts_with("resolution.latest_switch[1] = 200"),
             "{err}"
         );
+    }
+
+    /// Ranks are taken in turn across islands, ties keep slot order, a failed design (ranked
+    /// last) comes after every scored one of its island, and an island smaller than the others
+    /// simply runs out.
+    #[test]
+    fn merging_takes_every_islands_best_then_every_second_best() {
+        use crate::search::fixtures::{failed, island};
+        let mut a = island(0, &[0.1, 0.2, 0.3], &[-3.0, -1.0, -2.0]);
+        a.population[0].outcome = failed();
+        let b = island(1, &[0.4, 0.5], &[-0.5, -0.5]);
+        let c = island(2, &[0.6, 0.7, 0.8], &[-9.0, -4.0, -7.0]);
+        let islands = [a, b, c];
+        assert_eq!(
+            merge_order(&islands, 8),
+            [
+                (0, 1),
+                (1, 0),
+                (2, 1),
+                (0, 2),
+                (1, 1),
+                (2, 2),
+                (0, 0),
+                (2, 0)
+            ]
+        );
+        assert_eq!(merge_order(&islands, 4), [(0, 1), (1, 0), (2, 1), (0, 2)]);
+        assert_eq!(merge_order(&islands, 20).len(), 8);
     }
 }
