@@ -11,10 +11,16 @@
 //!
 //! and prints one CSV row per robot and evaluation, then the medians and maxima of the relative
 //! changes and the ratio of steps and wall time.
+//!
+//! `cargo bench -p amorph --bench settle -- step N ROBOTS LINK_ZETA DT_FRACTION` compares a longer
+//! step instead: the candidate (`settled` in the output) is the reference with the link damping
+//! ratio LINK_ZETA and the time-step fraction DT_FRACTION (the explicit link damping bounds the
+//! step: docs/dynamics.md, "Open points"); with the word `implicit` among the arguments the
+//! candidate integrates its link damping implicitly (`damping.link_integration`).
 
 use std::time::Instant;
 
-use amorph::dynamics::{DynamicScene, foam_palette};
+use amorph::dynamics::{DynamicScene, LinkDampingIntegration, foam_palette};
 use amorph::genome::{GenomeLimits, random_genome};
 use amorph::task::locomotion::{LocomotionOutcome, LocomotionProtocol, simulate_locomotion};
 use amorph::voxel::{DEFAULT_THRESHOLD, GridDims, VoxelGrid, keep_largest_component, voxelize};
@@ -28,15 +34,19 @@ fn robot(seed: u64, n: usize) -> VoxelGrid {
     keep_largest_component(&grid)
 }
 
-fn evaluate(
-    grid: &VoxelGrid,
-    n: usize,
-    settle_damping: Option<f64>,
-    dt_fraction: f64,
-) -> (LocomotionOutcome, f64) {
+/// One way of evaluating: its name, settle damping, link damping ratio, time-step fraction and
+/// whether the link damping is implicit.
+type Case = (&'static str, Option<f64>, f64, f64, bool);
+
+fn evaluate(grid: &VoxelGrid, n: usize, case: Case) -> (LocomotionOutcome, f64) {
+    let (_, settle_damping, link_zeta, dt_fraction, implicit) = case;
     let mut scene = DynamicScene::paper_locomotion();
     scene.voxel_size = 0.02 / n as f64;
     scene.dt_fraction = dt_fraction;
+    scene.damping.link = link_zeta;
+    if implicit {
+        scene.damping.link_integration = LinkDampingIntegration::Implicit;
+    }
     let mut protocol = LocomotionProtocol::default();
     protocol.settle.damping = settle_damping;
     let start = Instant::now();
@@ -54,6 +64,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn main() {
+    let step_mode = std::env::args().any(|a| a == "step");
+    let implicit = std::env::args().any(|a| a == "implicit");
     let args: Vec<f64> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
@@ -61,21 +73,40 @@ fn main() {
     let n = args.first().map_or(10, |&a| a as usize);
     let robots = args.get(1).map_or(20, |&a| a as u64);
     let zeta = args.get(2).copied().unwrap_or(0.1);
+    let reference_link = amorph::dynamics::DampingParams::default().link;
+    let candidate: Case = if step_mode {
+        let dt_fraction = args.get(3).copied().unwrap_or(1.0);
+        ("settled", None, zeta, dt_fraction, implicit)
+    } else {
+        ("settled", Some(zeta), reference_link, 1.0, false)
+    };
+    let describe = if step_mode {
+        let how = if implicit { "implicit" } else { "explicit" };
+        format!(
+            "{how} link damping {} at dt_fraction {}",
+            candidate.2, candidate.3
+        )
+    } else {
+        format!("settle.damping {zeta}")
+    };
     println!(
         "seed,voxels,case,fitness_mm,speed_percent_per_cycle,settle_time_s,steps,wall_s,status"
     );
     let (mut settled_change, mut half_change) = (Vec::new(), Vec::new());
     let (mut steps, mut wall) = ([0u64; 2], [0.0f64; 2]);
-    for seed in 0..robots {
+    // FIRST_SEED skips to one robot of the list (e.g. the one that walks).
+    let first: u64 = std::env::var("FIRST_SEED").map_or(0, |s| s.parse().unwrap_or(0));
+    for seed in first..first + robots {
         let grid = robot(seed, n);
-        let cases = [
-            ("reference", None, 1.0),
-            ("settled", Some(zeta), 1.0),
-            ("half_step", None, 0.5),
+        let cases: [Case; 3] = [
+            ("reference", None, reference_link, 1.0, false),
+            candidate,
+            ("half_step", None, reference_link, 0.5, false),
         ];
         let mut fitness = Vec::new();
-        for (k, (name, damping, dt_fraction)) in cases.into_iter().enumerate() {
-            let (o, w) = evaluate(&grid, n, damping, dt_fraction);
+        for (k, case) in cases.into_iter().enumerate() {
+            let name = case.0;
+            let (o, w) = evaluate(&grid, n, case);
             println!(
                 "{seed},{},{name},{:.6},{:.4},{:.4},{},{w:.2},{:?}",
                 o.voxel_count,
@@ -100,7 +131,7 @@ fn main() {
     }
     let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     println!(
-        "# {robots} robots at {n}^3, settle.damping {zeta}: |settled - reference| / reference: median {:.3}, max {:.3}; \
+        "# {robots} robots at {n}^3, {describe}: |settled - reference| / reference: median {:.3}, max {:.3}; \
          |half step - reference| / reference: median {:.3}, max {:.3}",
         median(settled_change.clone()),
         max(&settled_change),
