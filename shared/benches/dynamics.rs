@@ -272,7 +272,6 @@ fn cantilever_run(r: usize, dt_fraction: f64) -> StudyPoint {
             link: 1.0,
             global: 0.005 / r as f64,
             contact: 0.0,
-            ..Default::default()
         },
         ..DynamicScene::free_space(s)
     };

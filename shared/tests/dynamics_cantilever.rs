@@ -75,7 +75,6 @@ fn static_tip_deflection_matches_beam_theory_within_1_percent() {
         link: 1.0,
         global: 0.005,
         contact: 0.0,
-        ..Default::default()
     });
     sim.run_for(3.0).unwrap();
     let deflection = -tip_z(&sim, &tip);
@@ -136,7 +135,6 @@ fn first_bending_frequency_matches_beam_theory_within_2_percent() {
                 link: 0.0,
                 global: 0.0,
                 contact: 0.0,
-                ..Default::default()
             },
         );
         let measured = measured_frequency(&mut sim, &tip, duration);
@@ -170,7 +168,6 @@ fn undamped_energy_drifts_under_1_percent_over_1e5_steps() {
         link: 0.0,
         global: 0.0,
         contact: 0.0,
-        ..Default::default()
     });
     let start = sim.energy().total();
     let mut max_elastic: f64 = 0.0;

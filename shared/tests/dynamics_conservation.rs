@@ -22,7 +22,6 @@ fn free_rigid_motion_keeps_shape_and_momenta() {
             link: 1.0,
             global: 0.0,
             contact: 0.0,
-            ..Default::default()
         },
         ..DynamicScene::free_space(0.01)
     };

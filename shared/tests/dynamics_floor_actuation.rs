@@ -117,7 +117,6 @@ fn free_actuated_cube_breathes_20_percent_in_volume_within_1_percent() {
             link: 1.0,
             global: 0.0,
             contact: 0.0,
-            ..Default::default()
         },
         ..DynamicScene::free_space(0.01)
     };
@@ -240,7 +239,6 @@ fn lone_voxel_heights(actuated_contact: bool) -> Vec<(f64, f64)> {
             link: 1.0,
             global: 0.0,
             contact: 1.0,
-            ..Default::default()
         },
         ..DynamicScene::default()
     };

@@ -25,7 +25,6 @@ fn pulled_bar(poisson: bool, n: usize) -> Bar {
             link: 1.0,
             global: 0.02,
             contact: 0.0,
-            ..Default::default()
         },
         ..DynamicScene::free_space(S)
     };

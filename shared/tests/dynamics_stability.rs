@@ -101,7 +101,6 @@ fn zero_internal_damping_with_poisson_0_35_past_one_second() {
                 link: 0.0,
                 global: 0.0,
                 contact: 1.0,
-                ..Default::default()
             },
             ..on_floor(0.01)
         };

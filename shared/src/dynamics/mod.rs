@@ -12,7 +12,6 @@
 
 mod collide;
 mod error;
-mod implicit;
 mod integrate;
 mod lanes;
 mod link;
@@ -26,8 +25,7 @@ mod state;
 pub use error::{DynamicsError, Result};
 pub use math::{Mat3, Quat, Vec3};
 pub use scene::{
-    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, FrictionLaw,
-    LinkDampingIntegration, foam_palette,
+    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, FrictionLaw, foam_palette,
 };
 pub use simulation::{Divergence, DivergenceReason, Energy, Pass, Simulation};
 pub use state::TOP_EIGENVALUE;

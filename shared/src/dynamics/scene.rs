@@ -164,28 +164,6 @@ pub struct DampingParams {
     pub global: f64,
     /// Damping of the normal velocity of a voxel in floor contact, ζ. Default 1.0: no bouncing.
     pub contact: f64,
-    /// How the link damping enters the step: `explicit` (default, every result before
-    /// 2026-11-26: the damping forces from the last step's velocities, which bounds the step at
-    /// f ≈ 1.44 for ζ = 1) or `implicit` (backward Euler on the kicked velocities, one link at a
-    /// time, see `implicit.rs`: the same dissipation, no bound of its own on the step). Not
-    /// written when explicit, so earlier scenes encode to the same bytes.
-    #[serde(skip_serializing_if = "LinkDampingIntegration::is_explicit")]
-    pub link_integration: LinkDampingIntegration,
-}
-
-/// See [`DampingParams::link_integration`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LinkDampingIntegration {
-    #[default]
-    Explicit,
-    Implicit,
-}
-
-impl LinkDampingIntegration {
-    pub fn is_explicit(&self) -> bool {
-        *self == Self::Explicit
-    }
 }
 
 impl Default for DampingParams {
@@ -194,7 +172,6 @@ impl Default for DampingParams {
             link: 1.0,
             global: 0.0,
             contact: 1.0,
-            link_integration: LinkDampingIntegration::Explicit,
         }
     }
 }
@@ -240,7 +217,6 @@ impl DynamicScene {
                 link: 0.0,
                 global: 0.0,
                 contact: 0.0,
-                ..DampingParams::default()
             },
             ..Self::default()
         }

@@ -7,8 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::collide::Collisions;
 use super::error::{DynamicsError, Result};
-use super::implicit::{ImplicitDamping, drift_pass, kick_pass};
-use super::integrate::{IntegrationSummary, integrate_pass};
+use super::integrate::integrate_pass;
 use super::link::{LinkStep, link_energy, link_pass};
 use super::math::Vec3;
 use super::passes::{
@@ -44,10 +43,7 @@ pub struct Divergence {
 /// One pass of the step loop. The list is chosen once from the scene: a disabled pass is absent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
-    Links {
-        damped: bool,
-        actuated: bool,
-    },
+    Links { damped: bool, actuated: bool },
     Poisson,
     ExternalForces,
     Gravity,
@@ -55,9 +51,6 @@ pub enum Pass {
     Collisions,
     Floor,
     Integrate,
-    /// The integration split around the implicit link damping (`damping.link_integration`):
-    /// kick, damping sweep, drift.
-    IntegrateImplicit,
 }
 
 /// Energy split (J). Gravity's and the external loads' potential is −f·x (in `gravitational`),
@@ -88,8 +81,6 @@ pub struct Simulation {
     floor: FloorContact,
     collisions: Collisions,
     poisson: PoissonCoupling,
-    /// The constants of the implicit link damping (`damping.link_integration`), else empty.
-    implicit_damping: ImplicitDamping,
     gravity: Vec3,
     dt: f64,
     time: f64,
@@ -159,13 +150,7 @@ impl Simulation {
         } else {
             Collisions::default()
         };
-        let implicit_damping = if scene.damping.link_integration.is_explicit() {
-            ImplicitDamping::default()
-        } else {
-            ImplicitDamping::new(&links, &voxels, dt)
-        };
         let mut sim = Self {
-            implicit_damping,
             scene: scene.clone(),
             voxels,
             links,
@@ -191,7 +176,7 @@ impl Simulation {
         let mut passes = Vec::new();
         if !self.links.is_empty() {
             passes.push(Pass::Links {
-                damped: sc.damping.link > 0.0 && sc.damping.link_integration.is_explicit(),
+                damped: sc.damping.link > 0.0,
                 actuated: sc.actuation.is_some()
                     && self.actuation_time.is_some()
                     && self.voxels.actuated.iter().any(|&a| a),
@@ -215,12 +200,7 @@ impl Simulation {
         if sc.floor.is_some() {
             passes.push(Pass::Floor);
         }
-        let implicit = !sc.damping.link_integration.is_explicit() && sc.damping.link > 0.0;
-        passes.push(if implicit && !self.links.is_empty() {
-            Pass::IntegrateImplicit
-        } else {
-            Pass::Integrate
-        });
+        passes.push(Pass::Integrate);
         self.passes = passes;
     }
 
@@ -416,19 +396,6 @@ impl Simulation {
                     )
                 }
                 Pass::Integrate => summary = Some(integrate_pass(&mut self.voxels, self.dt)),
-                Pass::IntegrateImplicit => {
-                    kick_pass(&mut self.voxels, self.dt);
-                    (self.implicit_damping).pass(
-                        &self.links,
-                        &mut self.voxels,
-                        &self.floor.sticking,
-                    );
-                    let (max_speed2, checksum) = drift_pass(&mut self.voxels, self.dt);
-                    summary = Some(IntegrationSummary {
-                        max_speed2,
-                        checksum,
-                    });
-                }
             }
         }
         self.time += self.dt;
