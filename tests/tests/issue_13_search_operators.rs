@@ -12,12 +12,19 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-fn config(results_dir: &Path, seed: u64, local_search: &str) -> RunConfig {
+/// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process.
+fn circular_arc(name: &str, seed: u64, results_dir: &Path, sections: &str) -> RunConfig {
     let text = format!(
+        "name = \"{name}\"\nseed = {seed}\nresults_dir = \"{dir}\"\n{sections}\n\
+         [cluster]\nlocal_workers = 0\n[scene]\nkind = \"beam\"\ntarget = \"circular_arc\"\n",
+        dir = results_dir.display()
+    );
+    RunConfig::parse(&text, Path::new(&format!("{name}.toml"))).expect("valid test config")
+}
+
+fn config(results_dir: &Path, seed: u64, local_search: &str) -> RunConfig {
+    let sections = format!(
         r#"
-name = "operators"
-seed = {seed}
-results_dir = "{dir}"
 [search]
 population = 10
 islands = 3
@@ -42,15 +49,9 @@ across_probability = 0.5
 evaluations = 240
 [resolution]
 levels = [[4, 12, 4]]
-[cluster]
-local_workers = 0
-[scene]
-kind = "beam"
-target = "circular_arc"
-"#,
-        dir = results_dir.display()
+"#
     );
-    RunConfig::parse(&text, Path::new("operators.toml")).expect("valid test config")
+    circular_arc("operators", seed, results_dir, &sections)
 }
 
 /// One climb fed by every island (`shared`, with insertions, the improving nudges of each epoch
@@ -182,11 +183,8 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
 }
 
 fn merging_config(results_dir: &Path, evaluations: u64) -> RunConfig {
-    let text = format!(
+    let sections = format!(
         r#"
-name = "merging"
-seed = 11
-results_dir = "{dir}"
 [search]
 population = 8
 islands = 3
@@ -203,15 +201,9 @@ levels = [[3, 9, 3], [4, 12, 4]]
 stall_epochs = 1000
 latest_switch = [100]
 merge_islands = true
-[cluster]
-local_workers = 0
-[scene]
-kind = "beam"
-target = "circular_arc"
-"#,
-        dir = results_dir.display()
+"#
     );
-    RunConfig::parse(&text, Path::new("merging.toml")).expect("valid test config")
+    circular_arc("merging", 11, results_dir, &sections)
 }
 
 /// `resolution.merge_islands`: at the switch the three islands become one, carrying each
