@@ -136,9 +136,12 @@ impl ResolutionState {
 }
 
 /// The individuals that carry merged islands into the next level, as (island, slot): every
-/// island's best (in island order), then every island's second best, and so on, `count` in all.
-/// Taking ranks in turn rather than the pool's fittest keeps one island's near-copies of its best
-/// from filling the merged population.
+/// island's best (in island order), then every island's second best, and so on, `count` in all,
+/// passing over a genome already taken. Taking ranks in turn rather than the pool's fittest keeps
+/// one island's near-copies of its best from filling the merged population, and passing over
+/// repeats keeps migrants' copies out (in a 16-island run a third of the islands' bests were
+/// copies of one another: docs/evolution.md, session 18). Only when fewer than `count` genomes
+/// differ are repeats taken, in the same order.
 pub fn merge_order(islands: &[Island], count: usize) -> Vec<(usize, usize)> {
     let ranked: Vec<Vec<usize>> = islands
         .iter()
@@ -156,15 +159,26 @@ pub fn merge_order(islands: &[Island], count: usize) -> Vec<(usize, usize)> {
         })
         .collect();
     let deepest = ranked.iter().map(Vec::len).max().unwrap_or(0);
-    (0..deepest)
+    let turns: Vec<(usize, usize)> = (0..deepest)
         .flat_map(|rank| {
             ranked
                 .iter()
                 .enumerate()
                 .filter_map(move |(i, order)| order.get(rank).map(|&slot| (i, slot)))
         })
-        .take(count)
-        .collect()
+        .collect();
+    let genome = |&(i, s): &(usize, usize)| &islands[i].population[s].genome;
+    let (mut chosen, mut repeats) = (Vec::new(), Vec::new());
+    for turn in turns {
+        if chosen.iter().any(|c| genome(c) == genome(&turn)) {
+            repeats.push(turn);
+        } else {
+            chosen.push(turn);
+        }
+    }
+    chosen.extend(repeats);
+    chosen.truncate(count);
+    chosen
 }
 
 impl Default for ResolutionState {
@@ -243,8 +257,9 @@ mod tests {
     }
 
     /// Ranks are taken in turn across islands, ties keep slot order, a failed design (ranked
-    /// last) comes after every scored one of its island, and an island smaller than the others
-    /// simply runs out.
+    /// last) comes after every scored one of its island, an island smaller than the others
+    /// simply runs out, and a genome already taken (a migrant's copy) waits until every distinct
+    /// one is in.
     #[test]
     fn merging_takes_every_islands_best_then_every_second_best() {
         use crate::search::fixtures::{failed, island};
@@ -252,21 +267,20 @@ mod tests {
         a.population[0].outcome = failed();
         let b = island(1, &[0.4, 0.5], &[-0.5, -0.5]);
         let c = island(2, &[0.6, 0.7, 0.8], &[-9.0, -4.0, -7.0]);
-        let islands = [a, b, c];
-        assert_eq!(
-            merge_order(&islands, 8),
-            [
-                (0, 1),
-                (1, 0),
-                (2, 1),
-                (0, 2),
-                (1, 1),
-                (2, 2),
-                (0, 0),
-                (2, 0)
-            ]
-        );
-        assert_eq!(merge_order(&islands, 4), [(0, 1), (1, 0), (2, 1), (0, 2)]);
-        assert_eq!(merge_order(&islands, 20).len(), 8);
+        let mut islands = [a, b, c];
+        // Each carried individual as "island slot".
+        let order = |islands: &[Island], count| {
+            let taken: Vec<String> = (merge_order(islands, count).iter())
+                .map(|(i, s)| format!("{i}{s}"))
+                .collect();
+            taken.join(" ")
+        };
+        assert_eq!(order(&islands, 8), "01 10 21 02 11 22 00 20");
+        assert_eq!(order(&islands, 4), "01 10 21 02");
+        assert_eq!(order(&islands, 20), order(&islands, 8));
+        // Island 2's best is a copy of island 0's: it goes after the seven distinct genomes.
+        islands[2].population[1].genome = islands[0].population[1].genome.clone();
+        assert_eq!(order(&islands, 8), "01 10 02 11 22 00 20 21");
+        assert_eq!(order(&islands, 3), "01 10 02");
     }
 }
