@@ -273,14 +273,12 @@ impl Search {
     ) -> Result<()> {
         let schedule = &config.raw.resolution;
         let merge = schedule.merge_islands && self.islands.len() > 1;
-        let carried: Vec<Vec<(usize, usize)>> = if merge {
-            vec![merge_order(&self.islands, config.raw.search.population)]
+        let individuals: usize = self.islands.iter().map(|i| i.population.len()).sum();
+        let reevaluations = if merge {
+            individuals.min(config.raw.search.population)
         } else {
-            (self.islands.iter().enumerate())
-                .map(|(i, island)| (0..island.population.len()).map(|s| (i, s)).collect())
-                .collect()
-        };
-        let reevaluations: u64 = carried.iter().map(|c| c.len() as u64).sum();
+            individuals
+        } as u64;
         let switch_affordable = config
             .raw
             .budget
@@ -290,6 +288,13 @@ impl Search {
         if !(switch_affordable && self.resolution.observe(best, self.evaluations, schedule)) {
             return Ok(());
         }
+        let carried: Vec<Vec<(usize, usize)>> = if merge {
+            vec![merge_order(&self.islands, config.raw.search.population)]
+        } else {
+            (self.islands.iter().enumerate())
+                .map(|(i, island)| (0..island.population.len()).map(|s| (i, s)).collect())
+                .collect()
+        };
         let dims = schedule.dims(self.resolution.level);
         info!(epoch = self.epoch, resolution = %dims, merge, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
         let genomes: Vec<Vec<Genome>> = carried

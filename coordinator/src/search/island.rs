@@ -329,6 +329,18 @@ impl Island {
         &self.population[self.best_index()]
     }
 
+    /// Slots from the fittest to the least fit (the lower slot first on a tie).
+    pub fn ranked_slots(&self) -> Vec<usize> {
+        let pop = &self.population;
+        let mut order: Vec<usize> = (0..pop.len()).collect();
+        order.sort_by(|&a, &b| {
+            (pop[b].outcome.rank())
+                .total_cmp(&pop[a].outcome.rank())
+                .then(a.cmp(&b))
+        });
+        order
+    }
+
     /// Index of the least fit individual (the lowest index on a tie).
     pub fn worst_index(&self) -> usize {
         let mut worst = 0;

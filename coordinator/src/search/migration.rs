@@ -159,13 +159,7 @@ pub fn migrate(
         let island = &islands[from];
         let mut order: Vec<usize> = (0..island.population.len()).collect();
         match params.selection {
-            EmigrantSelection::Best => order.sort_by(|&a, &b| {
-                island.population[b]
-                    .outcome
-                    .rank()
-                    .total_cmp(&island.population[a].outcome.rank())
-                    .then(a.cmp(&b))
-            }),
+            EmigrantSelection::Best => order = island.ranked_slots(),
             EmigrantSelection::Random => {
                 for i in (1..order.len()).rev() {
                     let j = rng.random_range(0..=i);

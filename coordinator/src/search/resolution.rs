@@ -143,21 +143,7 @@ impl ResolutionState {
 /// copies of one another: docs/evolution.md, session 18). Only when fewer than `count` genomes
 /// differ are repeats taken, in the same order.
 pub fn merge_order(islands: &[Island], count: usize) -> Vec<(usize, usize)> {
-    let ranked: Vec<Vec<usize>> = islands
-        .iter()
-        .map(|island| {
-            let pop = &island.population;
-            let mut order: Vec<usize> = (0..pop.len()).collect();
-            order.sort_by(|&a, &b| {
-                pop[b]
-                    .outcome
-                    .rank()
-                    .total_cmp(&pop[a].outcome.rank())
-                    .then(a.cmp(&b))
-            });
-            order
-        })
-        .collect();
+    let ranked: Vec<Vec<usize>> = islands.iter().map(Island::ranked_slots).collect();
     let deepest = ranked.iter().map(Vec::len).max().unwrap_or(0);
     let turns: Vec<(usize, usize)> = (0..deepest)
         .flat_map(|rank| {
@@ -170,6 +156,9 @@ pub fn merge_order(islands: &[Island], count: usize) -> Vec<(usize, usize)> {
     let genome = |&(i, s): &(usize, usize)| &islands[i].population[s].genome;
     let (mut chosen, mut repeats) = (Vec::new(), Vec::new());
     for turn in turns {
+        if chosen.len() == count {
+            break;
+        }
         if chosen.iter().any(|c| genome(c) == genome(&turn)) {
             repeats.push(turn);
         } else {
