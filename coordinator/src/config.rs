@@ -367,35 +367,6 @@ target = "straight"
         assert_eq!(err("merge_islands = true\nmerge_sample = 50"), None);
     }
 
-    #[test]
-    fn a_density_lattice_must_divide_into_every_level() {
-        let err = |lattice: &str| {
-            let text = MINIMAL
-                .replace(
-                    "levels = [[6, 20, 6]]",
-                    "levels = [[6, 20, 6], [12, 40, 12]]",
-                )
-                .replace(
-                    "target = \"straight\"",
-                    &format!("target = \"straight\"\n{lattice}"),
-                );
-            RunConfig::parse(&text, Path::new("t.toml"))
-                .err()
-                .map(|e| e.to_string())
-        };
-        assert_eq!(err("density_lattice = [12, 40, 12]"), None);
-        assert_eq!(err("density_lattice = [24, 80, 24]"), None);
-        let coarse_only = err("density_lattice = [6, 20, 6]").expect("12 does not divide 6");
-        assert!(
-            coarse_only.contains("resolution.levels[1]") && coarse_only.contains("along x"),
-            "{coarse_only}"
-        );
-        let empty = err("density_lattice = [0, 40, 12]").expect("no cells refused");
-        assert!(empty.contains("scene.density_lattice"), "{empty}");
-        let huge = err("density_lattice = [1020, 1020, 1020]").expect("over a worker's grid");
-        assert!(huge.contains("scene.density_lattice"), "{huge}");
-    }
-
     /// Issue 12, item 4: sizes that overflowed passed validation, then panicked or aborted.
     #[test]
     fn regression_config_sizes_that_overflow_name_their_key() {

@@ -6,7 +6,11 @@
 //! paper's 12x40x12 beam. Counts arrive as `u64` so a config's 2^32 cannot wrap before the check.
 
 use amorph::voxel::GridDims;
-pub use amorph::voxel::{MAX_AXIS_VOXELS, MAX_VOXELS};
+
+/// Largest voxel count along one axis.
+pub const MAX_AXIS_VOXELS: u64 = 1024;
+/// Largest voxel count of a whole grid.
+pub const MAX_VOXELS: u64 = 1 << 20;
 
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum GridSizeError {

@@ -12,7 +12,7 @@
 use amorph::genome::{GaussianPoint, Genome};
 use amorph::material::MaterialId;
 use amorph::task::Scene;
-use amorph::voxel::{GridDims, VoxelGrid, centre_weight, voxel_densities};
+use amorph::voxel::{GridDims, VoxelGrid, density_fields};
 use rand::Rng;
 use rand::RngExt;
 
@@ -25,8 +25,7 @@ const MARGIN: f64 = 0.02;
 #[derive(Debug)]
 pub struct BoundarySite {
     design: VoxelGrid,
-    /// Per-material densities of every voxel as the scene's voxelization thresholds them
-    /// (material-major).
+    /// Per-material density fields at every voxel centre (material-major).
     fields: Vec<f64>,
     /// Cells whose state differs from one of their neighbours', in index order.
     boundary: Vec<usize>,
@@ -36,7 +35,7 @@ impl BoundarySite {
     /// Voxelizes `genome` as `scene` does at `dims` and finds its boundary.
     pub fn new(genome: &Genome, scene: &Scene, dims: GridDims) -> Self {
         let design = scene.design(genome, dims);
-        let fields = voxel_densities(genome, dims, scene.density_lattice(), scene.palette().len());
+        let fields = density_fields(genome, dims, scene.palette().len());
         let boundary = design.boundary_cells();
         Self {
             design,
@@ -87,9 +86,6 @@ impl BoundarySite {
                 (m, needed)
             }
         };
-        // A point narrower than a voxel adds less than its density to the voxel's mean over a
-        // density lattice: scale it up by what it adds there.
-        let density = density / centre_weight(dims, scene.density_lattice(), limits.falloff[0]);
         if !(limits.density[0]..=limits.density[1]).contains(&density) {
             return None;
         }
@@ -129,33 +125,20 @@ mod tests {
     }
 
     /// Every accepted insertion gives its voxel the state it aimed at in the voxelization, whatever
-    /// the design: the density comes from the field there, so this holds for any genome and cell,
-    /// and also when a density lattice averages the field over each voxel.
+    /// the design: the density comes from the field there, so this holds for any genome and cell.
     #[test]
     fn an_insertion_gives_its_voxel_a_new_state_and_changes_little_else() {
-        let averaged: Scene = toml::from_str(
-            "kind = \"beam\"\ntarget = \"circular_arc\"\ndensity_lattice = [12, 40, 12]",
-        )
-        .expect("a beam scene with a lattice");
-        for scene in [beam(), averaged] {
-            insertions_flip_their_voxel(&scene);
-        }
-    }
-
-    fn insertions_flip_their_voxel(scene: &Scene) {
+        let scene = beam();
         let dims = GridDims::new(6, 20, 6);
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let (mut inserted, mut changed_cells) = (0, Vec::new());
         for _ in 0..40 {
             let genome = random_genome(&mut rng, 30, &GenomeLimits::default(), 2);
-            let site = BoundarySite::new(&genome, scene, dims);
-            let raw = |g: &Genome| {
-                let lattice = scene.density_lattice();
-                amorph::voxel::voxelize_averaged(g, dims, lattice, 2, scene.threshold())
-            };
+            let site = BoundarySite::new(&genome, &scene, dims);
+            let raw = |g: &Genome| amorph::voxel::voxelize(g, dims, 2, scene.threshold());
             let before = raw(&genome);
             let mut child = genome.clone();
-            let Some((cell, state)) = site.insert(&mut child, &mut rng, scene) else {
+            let Some((cell, state)) = site.insert(&mut child, &mut rng, &scene) else {
                 assert_eq!(child, genome, "a refused insertion leaves the genome alone");
                 continue;
             };

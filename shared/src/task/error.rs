@@ -82,26 +82,3 @@ pub fn counts_fit(
     }
     Ok(())
 }
-
-/// Checks a scene's `density_lattice`: every count at least 1 and the whole lattice no larger
-/// than the largest grid a worker takes.
-pub fn density_lattice(lattice: Option<[usize; 3]>) -> Result<(), SceneError> {
-    use crate::voxel::{MAX_AXIS_VOXELS, MAX_VOXELS};
-    let Some(counts) = lattice else {
-        return Ok(());
-    };
-    let fits = counts
-        .iter()
-        .all(|&n| n >= 1 && n as u64 <= MAX_AXIS_VOXELS)
-        && counts.iter().map(|&n| n as u64).product::<u64>() <= MAX_VOXELS;
-    if fits {
-        Ok(())
-    } else {
-        Err(SceneError::new(
-            "density_lattice",
-            format!(
-                "{counts:?} must have 1 to {MAX_AXIS_VOXELS} cells per axis and at most {MAX_VOXELS} in all"
-            ),
-        ))
-    }
-}

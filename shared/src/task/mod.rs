@@ -28,7 +28,7 @@ use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
 use crate::material::Palette;
 use crate::outcome::Failure;
-use crate::voxel::{GridDims, VoxelGrid, check_lattice, voxelize_averaged};
+use crate::voxel::{GridDims, VoxelGrid, voxelize};
 
 /// The figure a task's progress is followed by (history, progress plots): its name as a CSV
 /// column, its axis label, and whether it is best read on a log axis.
@@ -100,9 +100,6 @@ pub trait Task {
     fn limits(&self) -> &GenomeLimits;
     /// Total-density threshold of the voxelization.
     fn threshold(&self) -> f64;
-    /// The lattice the density field is averaged over, per voxel, when voxelizing (see
-    /// [`voxelize_averaged`]); `None` (every task's default) samples each voxel's centre.
-    fn density_lattice(&self) -> Option<GridDims>;
     /// Edge length of one voxel at resolution `dims`, m.
     fn voxel_size(&self, dims: GridDims) -> f64;
     /// Whether the task can be evaluated at `dims` (a reason if not).
@@ -159,24 +156,12 @@ pub type Outcome = crate::outcome::Outcome<Metrics>;
 
 /// The voxels `genome` makes at `dims`, after `task` keeps what it can use.
 pub fn design<T: Task>(task: &T, genome: &Genome, dims: GridDims) -> VoxelGrid {
-    let (materials, threshold) = (task.palette().len(), task.threshold());
-    task.keep(&voxelize_averaged(
+    task.keep(&voxelize(
         genome,
         dims,
-        task.density_lattice(),
-        materials,
-        threshold,
+        task.palette().len(),
+        task.threshold(),
     ))
-}
-
-/// Whether `task` can be evaluated at `dims`: its own rule, and a density lattice that divides
-/// into the voxels.
-fn check_resolution<T: Task>(task: &T, dims: GridDims) -> Result<(), String> {
-    task.check_dims(dims)?;
-    match task.density_lattice() {
-        Some(lattice) => check_lattice(dims, lattice),
-        None => Ok(()),
-    }
 }
 
 /// The whole evaluation of a task: validate the genome, check the resolution, voxelize, keep,
@@ -185,7 +170,7 @@ fn evaluate_task<T: Task>(task: &T, genome: &Genome, dims: GridDims) -> TaskOutc
     if let Err(e) = genome.validate(task.limits(), task.palette().len()) {
         return TaskOutcome::failed(Failure::InvalidGenome(e.to_string()));
     }
-    if let Err(reason) = check_resolution(task, dims) {
+    if let Err(reason) = task.check_dims(dims) {
         return TaskOutcome::failed(Failure::InvalidRequest(reason));
     }
     task.simulate(&design(task, genome, dims))
@@ -237,18 +222,13 @@ macro_rules! tasks {
                 match self { $(Scene::$variant(s) => s.threshold()),+ }
             }
 
-            /// The lattice a voxel's density is averaged over (see [`Task::density_lattice`]).
-            pub fn density_lattice(&self) -> Option<GridDims> {
-                match self { $(Scene::$variant(s) => s.density_lattice()),+ }
-            }
-
             /// Edge length of one voxel at resolution `dims`, m.
             pub fn voxel_size(&self, dims: GridDims) -> f64 {
                 match self { $(Scene::$variant(s) => s.voxel_size(dims)),+ }
             }
 
             pub fn check_dims(&self, dims: GridDims) -> Result<(), String> {
-                match self { $(Scene::$variant(s) => check_resolution(s, dims)),+ }
+                match self { $(Scene::$variant(s) => s.check_dims(dims)),+ }
             }
 
             /// The voxels a genome makes at `dims`, after the task keeps what it can use.

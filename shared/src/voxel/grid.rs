@@ -4,12 +4,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::material::MaterialId;
 
-/// Largest voxel count along one axis (a config's level, a task on the wire, a scene's density
-/// lattice; `amorph_proto::grid` explains the figure).
-pub const MAX_AXIS_VOXELS: u64 = 1024;
-/// Largest voxel count of a whole grid.
-pub const MAX_VOXELS: u64 = 1 << 20;
-
 /// Resolution of a workspace: voxel counts along X, Y and Z.
 ///
 /// By the paper's convention a beam lies along +Y (clamped on the −Y layer) and gravity or load

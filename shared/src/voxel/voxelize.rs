@@ -160,119 +160,8 @@ pub fn voxelize(
     material_count: usize,
     threshold: f64,
 ) -> VoxelGrid {
-    voxelize_averaged(genome, dims, None, material_count, threshold)
-}
-
-/// Why `lattice` cannot refine `dims`: it must hold a whole number of lattice cells per voxel
-/// along every axis.
-pub fn check_lattice(dims: GridDims, lattice: GridDims) -> Result<(), String> {
-    let axes = [
-        ("x", dims.nx, lattice.nx),
-        ("y", dims.ny, lattice.ny),
-        ("z", dims.nz, lattice.nz),
-    ];
-    match axes.iter().find(|(_, n, l)| *n == 0 || *l % *n != 0) {
-        Some((axis, n, l)) => Err(format!(
-            "a density lattice of {l} cells along {axis} does not divide into {n} voxels"
-        )),
-        None => Ok(()),
-    }
-}
-
-/// Every voxel's per-material density as the voxelization thresholds it, material-major
-/// (`fields[k * cells + i]`): with a `lattice`, the mean of the field at the centres of the
-/// lattice cells inside the voxel (a box filter of the continuous field); without one, or with
-/// `lattice == dims`, the field at the voxel's centre (`density_fields`, bit for bit). With the
-/// finest resolution of a run as the lattice, a coarse level's design is the fine design seen
-/// through larger voxels rather than a point sample the search can tune to its grid
-/// (docs/evolution.md, session 19). `lattice` must pass [`check_lattice`].
-pub fn voxel_densities(
-    genome: &Genome,
-    dims: GridDims,
-    lattice: Option<GridDims>,
-    material_count: usize,
-) -> Vec<f64> {
-    let Some(lattice) = lattice.filter(|&l| l != dims) else {
-        return density_fields(genome, dims, material_count);
-    };
-    let (rx, ry, rz) = (
-        lattice.nx / dims.nx,
-        lattice.ny / dims.ny,
-        lattice.nz / dims.nz,
-    );
-    // The workspace keeps the voxel grid's aspect, so the field is the one `voxelize` samples.
-    let sampler = LayerSampler::new(
-        genome,
-        dims,
-        material_count,
-        &cell_centres(lattice.nx),
-        &cell_centres(lattice.ny),
-    );
-    let layer = sampler.layer_len();
     let cells = dims.cell_count();
-    let mut sums = vec![0.0; material_count * cells];
-    let mut samples = vec![0.0; material_count * layer];
-    for (lz, &height) in cell_centres(lattice.nz).iter().enumerate() {
-        samples.fill(0.0);
-        sampler.accumulate_layer(height, &mut samples, layer);
-        let z = lz / rz;
-        for k in 0..material_count {
-            let (from, to) = (
-                &samples[k * layer..][..layer],
-                &mut sums[k * cells..][..cells],
-            );
-            for ly in 0..lattice.ny {
-                let row = &from[ly * lattice.nx..][..lattice.nx];
-                for (lx, &rho) in row.iter().enumerate() {
-                    to[dims.index(lx / rx, ly / ry, z)] += rho;
-                }
-            }
-        }
-    }
-    let per_voxel = (rx * ry * rz) as f64;
-    sums.iter_mut().for_each(|s| *s /= per_voxel);
-    sums
-}
-
-/// What a unit-density point of `falloff` at a voxel's centre adds to that voxel's density in
-/// [`voxel_densities`]: 1 without a lattice, else its Gaussian's mean over the voxel's lattice
-/// centres (a product over the axes, since the Gaussian factorises).
-pub fn centre_weight(dims: GridDims, lattice: Option<GridDims>, falloff: f64) -> f64 {
-    let Some(lattice) = lattice else {
-        return 1.0;
-    };
-    let scales = axis_scales(dims);
-    [
-        (dims.nx, lattice.nx),
-        (dims.ny, lattice.ny),
-        (dims.nz, lattice.nz),
-    ]
-    .iter()
-    .zip(scales)
-    .map(|(&(n, l), scale)| {
-        let r = l / n;
-        let mean: f64 = (0..r)
-            .map(|i| {
-                let offset = ((i as f64 + 0.5) / r as f64 - 0.5) / n as f64 * scale;
-                (-offset * offset / (2.0 * falloff * falloff)).exp()
-            })
-            .sum();
-        mean / r as f64
-    })
-    .product()
-}
-
-/// Voxelizes a genome at `dims` from [`voxel_densities`]: filled where the summed density
-/// exceeds `threshold`, with the material of highest density (the lowest index on a tie).
-pub fn voxelize_averaged(
-    genome: &Genome,
-    dims: GridDims,
-    lattice: Option<GridDims>,
-    material_count: usize,
-    threshold: f64,
-) -> VoxelGrid {
-    let cells = dims.cell_count();
-    let fields = voxel_densities(genome, dims, lattice, material_count);
+    let fields = density_fields(genome, dims, material_count);
     let cells_out = (0..cells)
         .map(|i| material_at(material_count, threshold, |k| fields[k * cells + i]))
         .collect();
@@ -335,20 +224,6 @@ mod tests {
         assert_eq!(grid.get(16, 5, 5), Some(MaterialId(1)));
     }
 
-    /// Material `k`'s field at normalized position `c` of a workspace with axis scales `s`,
-    /// summed point by point.
-    fn direct_field(g: &Genome, c: [f64; 3], s: [f64; 3], k: usize) -> f64 {
-        (g.points.iter())
-            .filter(|p| p.material.index() == k)
-            .map(|p| {
-                let d2: f64 = (0..3)
-                    .map(|a| ((c[a] - p.position[a]) * s[a]).powi(2))
-                    .sum();
-                p.density * (-d2 / (2.0 * p.falloff * p.falloff)).exp()
-            })
-            .sum()
-    }
-
     #[test]
     fn separable_fields_match_the_direct_sum() {
         let g = Genome::new(vec![
@@ -361,112 +236,21 @@ mod tests {
         assert_eq!(fields.len(), dims.cell_count());
         for (i, &field) in fields.iter().enumerate() {
             let [x, y, z] = dims.coords(i);
-            let direct = direct_field(&g, dims.normalized_centre(x, y, z), s, 0);
+            let c = dims.normalized_centre(x, y, z);
+            let direct: f64 = g
+                .points
+                .iter()
+                .map(|p| {
+                    let d2: f64 = (0..3)
+                        .map(|a| ((c[a] - p.position[a]) * s[a]).powi(2))
+                        .sum();
+                    p.density * (-d2 / (2.0 * p.falloff * p.falloff)).exp()
+                })
+                .sum();
             assert!(
                 (field - direct).abs() < 1e-12,
                 "cell {i}: {field} vs {direct}"
             );
         }
-    }
-
-    /// A voxel of the averaged voxelization is filled, and with which material, by the mean of
-    /// the field at the lattice cells inside it: checked against the Gaussians summed directly at
-    /// each lattice centre (in the voxel grid's workspace) and averaged here, for random genomes,
-    /// lattices 2 and 3 times finer, and unequal factors along the axes.
-    #[test]
-    fn an_averaged_voxel_takes_the_mean_of_its_lattice_cells() {
-        use crate::genome::random_genome;
-        use rand::SeedableRng;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(19);
-        let cases = [
-            (GridDims::new(6, 20, 6), GridDims::new(12, 40, 12)),
-            (GridDims::new(4, 4, 4), GridDims::new(12, 12, 12)),
-            (GridDims::new(3, 5, 2), GridDims::new(6, 15, 2)),
-        ];
-        for (dims, lattice) in cases {
-            let r = [
-                lattice.nx / dims.nx,
-                lattice.ny / dims.ny,
-                lattice.nz / dims.nz,
-            ];
-            let per_voxel = (r[0] * r[1] * r[2]) as f64;
-            for _ in 0..5 {
-                let genome = random_genome(&mut rng, 30, &Default::default(), 2);
-                let grid = voxelize_averaged(&genome, dims, Some(lattice), 2, 0.5);
-                let mut means = vec![[0.0; 2]; dims.cell_count()];
-                for j in 0..lattice.cell_count() {
-                    let [x, y, z] = lattice.coords(j);
-                    let c = lattice.normalized_centre(x, y, z);
-                    let voxel = dims.index(x / r[0], y / r[1], z / r[2]);
-                    for (k, m) in means[voxel].iter_mut().enumerate() {
-                        *m += direct_field(&genome, c, axis_scales(dims), k) / per_voxel;
-                    }
-                }
-                for (i, mean) in means.iter().enumerate() {
-                    let total = mean[0] + mean[1];
-                    // Skip cells within rounding of the threshold or of a material tie.
-                    if (total - 0.5).abs() < 1e-9 || (mean[0] - mean[1]).abs() < 1e-9 {
-                        continue;
-                    }
-                    let densest = MaterialId(u8::from(mean[1] > mean[0]));
-                    let expected = (total > 0.5).then_some(densest);
-                    assert_eq!(
-                        grid.cells()[i],
-                        expected,
-                        "{dims:?} over {lattice:?}, cell {i}"
-                    );
-                }
-            }
-        }
-    }
-
-    /// Averaging is a box filter of a smooth field: a blob centred in the workspace stays mirror
-    /// symmetric, and a lattice equal to the grid is the centre sample itself.
-    #[test]
-    fn averaging_keeps_symmetry_and_a_lattice_equal_to_the_grid_is_the_plain_voxelization() {
-        let g = Genome::new(vec![blob([0.5, 0.5, 0.5], 1.0, 0)]);
-        let dims = GridDims::new(6, 6, 6);
-        let grid = voxelize_averaged(&g, dims, Some(GridDims::new(18, 18, 18)), 1, 0.5);
-        assert!(grid.filled_count() > 0 && grid.filled_count() < dims.cell_count());
-        for i in 0..dims.cell_count() {
-            let [x, y, z] = dims.coords(i);
-            assert_eq!(grid.get(x, y, z), grid.get(5 - x, y, z));
-            assert_eq!(grid.get(x, y, z), grid.get(x, z, y));
-        }
-        assert_eq!(
-            voxelize_averaged(&g, dims, Some(dims), 1, 0.5),
-            voxelize(&g, dims, 1, 0.5)
-        );
-    }
-
-    /// A unit point at a voxel's centre adds `centre_weight` to that voxel's averaged density.
-    #[test]
-    fn a_centred_points_share_of_its_voxel_is_the_centre_weight() {
-        let (dims, lattice) = (GridDims::new(6, 20, 6), GridDims::new(18, 40, 12));
-        let [x, y, z] = [2, 7, 4];
-        let point = GaussianPoint {
-            position: dims.normalized_centre(x, y, z),
-            density: 1.0,
-            falloff: 0.02,
-            material: MaterialId(0),
-        };
-        let g = Genome::new(vec![point]);
-        let averaged = voxel_densities(&g, dims, Some(lattice), 1)[dims.index(x, y, z)];
-        let weight = centre_weight(dims, Some(lattice), 0.02);
-        assert!((averaged - weight).abs() < 1e-14, "{averaged} vs {weight}");
-        assert!(weight > 0.0 && weight < 1.0);
-        assert_eq!(centre_weight(dims, None, 0.02), 1.0);
-    }
-
-    #[test]
-    fn a_lattice_must_divide_into_the_voxels() {
-        let dims = GridDims::new(6, 20, 6);
-        assert!(check_lattice(dims, GridDims::new(12, 40, 12)).is_ok());
-        assert!(check_lattice(dims, dims).is_ok());
-        let err = check_lattice(dims, GridDims::new(12, 30, 12)).unwrap_err();
-        assert!(
-            err.contains("30 cells along y") && err.contains("20 voxels"),
-            "{err}"
-        );
     }
 }

@@ -58,11 +58,6 @@ impl Task for BeamScene {
         self.threshold
     }
 
-    fn density_lattice(&self) -> Option<GridDims> {
-        self.density_lattice
-            .map(|[nx, ny, nz]| GridDims::new(nx, ny, nz))
-    }
-
     /// The beam is a physical length along Y: the voxel size is that over the layer count.
     fn voxel_size(&self, dims: GridDims) -> f64 {
         self.length / dims.ny as f64

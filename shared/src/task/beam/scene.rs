@@ -32,12 +32,6 @@ pub struct BeamScene {
     /// Total-density threshold of the voxelization.
     #[serde(default = "default_threshold")]
     pub threshold: f64,
-    /// Averages the density field over this lattice (`[nx, ny, nz]`) inside each voxel when
-    /// voxelizing, instead of sampling the voxel's centre: with a run's finest resolution here,
-    /// its coarse levels see the fine design through larger voxels. Unset (the default): the
-    /// paper's centre samples. Every resolution level must divide it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub density_lattice: Option<[usize; 3]>,
     /// Ranges and size limit a genome must respect.
     #[serde(default)]
     pub limits: GenomeLimits,
@@ -64,7 +58,6 @@ impl BeamScene {
             length: default_length(),
             tip_load: default_tip_load(),
             threshold: default_threshold(),
-            density_lattice: None,
             limits: GenomeLimits::default(),
             solver: StaticSolverParams::default(),
         }
@@ -73,7 +66,6 @@ impl BeamScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
         palette_and_limits(&self.palette, &self.limits)?;
-        crate::task::error::density_lattice(self.density_lattice)?;
         self.target.validate()?;
         check_load_case(self.length, self.tip_load, &self.solver, self.threshold)
     }

@@ -51,11 +51,6 @@ impl Task for LocomotionScene {
         self.threshold
     }
 
-    fn density_lattice(&self) -> Option<GridDims> {
-        self.density_lattice
-            .map(|[nx, ny, nz]| GridDims::new(nx, ny, nz))
-    }
-
     /// The robot's size is the workspace: the voxel size is that over the longest count.
     fn voxel_size(&self, dims: GridDims) -> f64 {
         self.dynamics_at(dims).voxel_size

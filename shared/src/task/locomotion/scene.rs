@@ -24,12 +24,6 @@ pub struct LocomotionScene {
     pub workspace: f64,
     /// Total-density threshold of the voxelization.
     pub threshold: f64,
-    /// Averages the density field over this lattice (`[nx, ny, nz]`) inside each voxel when
-    /// voxelizing, instead of sampling the voxel's centre: with a run's finest resolution here,
-    /// its coarse levels see the fine design through larger voxels. Unset (the default): the
-    /// paper's centre samples. Every resolution level must divide it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub density_lattice: Option<[usize; 3]>,
     /// Ranges and size limit a genome must respect.
     pub limits: GenomeLimits,
     /// The direction the robot must travel, degrees in the floor plane from +X towards +Y.
@@ -76,7 +70,6 @@ impl Default for LocomotionScene {
             palette: foam_palette(),
             workspace: 0.02,
             threshold: DEFAULT_THRESHOLD,
-            density_lattice: None,
             limits: GenomeLimits::default(),
             heading_degrees: 0.0,
             incline_degrees: 0.0,
@@ -93,7 +86,6 @@ impl LocomotionScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
         palette_and_limits(&self.palette, &self.limits)?;
-        crate::task::error::density_lattice(self.density_lattice)?;
         positive("workspace", self.workspace)?;
         finite("threshold", self.threshold)?;
         finite("heading_degrees", self.heading_degrees)?;

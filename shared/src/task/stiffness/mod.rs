@@ -47,11 +47,6 @@ impl Task for StiffnessScene {
         self.threshold
     }
 
-    fn density_lattice(&self) -> Option<GridDims> {
-        self.density_lattice
-            .map(|[nx, ny, nz]| GridDims::new(nx, ny, nz))
-    }
-
     fn voxel_size(&self, dims: GridDims) -> f64 {
         self.length / dims.ny as f64
     }

@@ -28,12 +28,6 @@ pub struct StiffnessScene {
     pub tip_load: f64,
     /// Total-density threshold of the voxelization.
     pub threshold: f64,
-    /// Averages the density field over this lattice (`[nx, ny, nz]`) inside each voxel when
-    /// voxelizing, instead of sampling the voxel's centre: with a run's finest resolution here,
-    /// its coarse levels see the fine design through larger voxels. Unset (the default): the
-    /// paper's centre samples. Every resolution level must divide it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub density_lattice: Option<[usize; 3]>,
     /// Ranges and size limit a genome must respect.
     pub limits: GenomeLimits,
     /// Static solver settings.
@@ -49,7 +43,6 @@ impl Default for StiffnessScene {
             length: 0.04,
             tip_load: 0.01,
             threshold: DEFAULT_THRESHOLD,
-            density_lattice: None,
             limits: GenomeLimits::default(),
             solver: StaticSolverParams::default(),
         }
@@ -60,7 +53,6 @@ impl StiffnessScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
         palette_and_limits(&self.palette, &self.limits)?;
-        crate::task::error::density_lattice(self.density_lattice)?;
         if usize::from(self.hard_material) >= self.palette.len() {
             return Err(SceneError::new(
                 "hard_material",
