@@ -273,17 +273,6 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     ClusterSettings::try_from(&raw.cluster)?;
     raw.export.validate()?;
     raw.resolution.validate()?;
-    if let Some(sample) = raw.resolution.merge_sample {
-        if !raw.resolution.merge_islands {
-            return Err("resolution.merge_sample needs resolution.merge_islands = true".into());
-        }
-        if sample < raw.search.population {
-            return Err(format!(
-                "resolution.merge_sample = {sample} must be at least search.population ({})",
-                raw.search.population
-            ));
-        }
-    }
     raw.scene.validate().map_err(|e| format!("scene.{e}"))?;
     for (i, &[nx, ny, nz]) in raw.resolution.levels.iter().enumerate() {
         raw.scene
@@ -344,27 +333,6 @@ target = "straight"
             .unwrap_err()
             .to_string();
         assert!(err.contains("wavy"), "{err}");
-    }
-
-    #[test]
-    fn a_merge_sample_needs_the_merge_and_at_least_a_population() {
-        let err = |resolution: &str| {
-            let text = MINIMAL.replace(
-                "levels = [[6, 20, 6]]",
-                &format!("levels = [[6, 20, 6]]\n{resolution}"),
-            );
-            RunConfig::parse(&text, Path::new("t.toml"))
-                .err()
-                .map(|e| e.to_string())
-        };
-        let alone = err("merge_sample = 200").expect("a sample without the merge is refused");
-        assert!(alone.contains("resolution.merge_sample needs"), "{alone}");
-        let small = err("merge_islands = true\nmerge_sample = 49").expect("49 < 50 is refused");
-        assert!(
-            small.contains("resolution.merge_sample = 49") && small.contains("(50)"),
-            "{small}"
-        );
-        assert_eq!(err("merge_islands = true\nmerge_sample = 50"), None);
     }
 
     /// Issue 12, item 4: sizes that overflowed passed validation, then panicked or aborted.

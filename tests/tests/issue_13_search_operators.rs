@@ -182,8 +182,8 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     );
 }
 
-fn merging_sections(evaluations: u64, resolution: &str) -> String {
-    format!(
+fn merging_config(results_dir: &Path, evaluations: u64) -> RunConfig {
+    let sections = format!(
         r#"
 [search]
 population = 8
@@ -201,18 +201,9 @@ levels = [[3, 9, 3], [4, 12, 4]]
 stall_epochs = 1000
 latest_switch = [100]
 merge_islands = true
-{resolution}
 "#
-    )
-}
-
-fn merging_config(results_dir: &Path, evaluations: u64, resolution: &str) -> RunConfig {
-    circular_arc(
-        "merging",
-        11,
-        results_dir,
-        &merging_sections(evaluations, resolution),
-    )
+    );
+    circular_arc("merging", 11, results_dir, &sections)
 }
 
 /// `resolution.merge_islands`: at the switch the three islands become one, carrying each
@@ -226,16 +217,16 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
         scratch_dir("merge-3"),
         scratch_dir("merge-resumed"),
     ];
-    let one = run_locally(&merging_config(&dirs[0], 260, ""), 1);
-    let three = run_locally(&merging_config(&dirs[1], 260, ""), 3);
+    let one = run_locally(&merging_config(&dirs[0], 260), 1);
+    let three = run_locally(&merging_config(&dirs[1], 260), 3);
     assert_eq!(one.evaluations, 260);
     assert_eq!(one.populations.len(), 1);
     assert_eq!(fingerprint(&one), fingerprint(&three));
 
     // Stopped at 140 evaluations (after the merge at 108 + 8), then extended to 260.
-    let first = run_locally(&merging_config(&dirs[2], 140, ""), 1);
+    let first = run_locally(&merging_config(&dirs[2], 140), 1);
     assert_eq!((first.evaluations, first.populations.len()), (140, 1));
-    let config = merging_config(&dirs[2], 260, "");
+    let config = merging_config(&dirs[2], 260);
     let store = RunStore::resume(&config).expect("the stopped run's store");
     let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), 2);
     let resumed = run(
@@ -250,12 +241,8 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
     .expect("the resumed run completes");
     assert_eq!(fingerprint(&resumed), fingerprint(&one));
 
-    let db = rusqlite::Connection::open(
-        merging_config(&dirs[0], 260, "")
-            .run_dir()
-            .join("run.sqlite"),
-    )
-    .unwrap();
+    let db = rusqlite::Connection::open(merging_config(&dirs[0], 260).run_dir().join("run.sqlite"))
+        .unwrap();
     let rows = |sql: &str| -> Vec<(i64, i64, String)> {
         let mut stmt = db.prepare(sql).unwrap();
         stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
@@ -309,60 +296,4 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
     assert!(steps[..s - 1].iter().all(|&d| d == 12), "{steps:?}");
     assert_eq!(steps[s - 1], 8 + 12, "{steps:?}");
     assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
-}
-
-/// `resolution.merge_sample`: the switch re-evaluates 16 of the islands' designs and the merged
-/// island of 8 is exactly the 8 of them the finer grid scores best, in the order they were
-/// sampled; the run stays bit-identical on 1 and 3 threads.
-#[test]
-fn a_merge_sample_keeps_the_designs_the_finer_grid_scores_best() {
-    let dirs = [
-        scratch_dir("merge-sample-1"),
-        scratch_dir("merge-sample-3"),
-        scratch_dir("merge-sample-end"),
-    ];
-    // Grids fine enough that most designs are scored at both levels (at 3x9x3 most are empty).
-    let sampled = |dir: &Path, evaluations| {
-        let sections = merging_sections(evaluations, "merge_sample = 24")
-            .replace("[[3, 9, 3], [4, 12, 4]]", "[[4, 12, 4], [6, 18, 6]]")
-            .replace("initial_points = 20", "initial_points = 60");
-        circular_arc("merging", 11, dir, &sections)
-    };
-    let one = run_locally(&sampled(&dirs[0], 200), 1);
-    let three = run_locally(&sampled(&dirs[1], 200), 3);
-    assert_eq!((one.evaluations, one.populations.len()), (200, 1));
-    assert_eq!(fingerprint(&one), fingerprint(&three));
-
-    // The same run ended right after the switch (108 evaluations, then the sample of 16): its
-    // final population is the merged island as the switch made it.
-    let ended = run_locally(&sampled(&dirs[2], 132), 1);
-    assert_eq!((ended.evaluations, ended.populations.len()), (132, 1));
-    let db =
-        rusqlite::Connection::open(sampled(&dirs[2], 132).run_dir().join("run.sqlite")).unwrap();
-    let sample: Vec<(u64, f64)> = {
-        let mut stmt = db
-            .prepare(
-                "SELECT task_id, COALESCE(fitness, -1e300) FROM evaluation
-                 WHERE purpose = 'reevaluation' ORDER BY task_id",
-            )
-            .unwrap();
-        stmt.query_map([], |r| Ok((r.get::<_, i64>(0)? as u64, r.get(1)?)))
-            .unwrap()
-            .map(Result::unwrap)
-            .collect()
-    };
-    assert_eq!(sample.len(), 24);
-    // The 8 best fine scores, a tie going to the earlier-sampled design, kept in sampled order.
-    let mut ranked: Vec<usize> = (0..24).collect();
-    ranked.sort_by(|&a, &b| sample[b].1.total_cmp(&sample[a].1).then(a.cmp(&b)));
-    let mut expected: Vec<usize> = ranked[..8].to_vec();
-    expected.sort();
-    let expected: Vec<u64> = expected.iter().map(|&i| sample[i].0).collect();
-    let kept: Vec<u64> = ended.populations[0].iter().map(|ind| ind.task.0).collect();
-    assert_eq!(kept, expected);
-    // The sample is not simply its first 8: the test would not tell a truncation from a choice.
-    assert_ne!(
-        expected,
-        sample[..8].iter().map(|s| s.0).collect::<Vec<_>>()
-    );
 }

@@ -20,8 +20,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
-    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, fine_best,
-    merge_order, migrate,
+    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, merge_order,
+    migrate,
 };
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
@@ -274,10 +274,8 @@ impl Search {
         let schedule = &config.raw.resolution;
         let merge = schedule.merge_islands && self.islands.len() > 1;
         let individuals: usize = self.islands.iter().map(|i| i.population.len()).sum();
-        let population = config.raw.search.population;
-        let sample = schedule.merge_sample.unwrap_or(population);
         let reevaluations = if merge {
-            individuals.min(sample)
+            individuals.min(config.raw.search.population)
         } else {
             individuals
         } as u64;
@@ -291,7 +289,7 @@ impl Search {
             return Ok(());
         }
         let carried: Vec<Vec<(usize, usize)>> = if merge {
-            vec![merge_order(&self.islands, sample)]
+            vec![merge_order(&self.islands, config.raw.search.population)]
         } else {
             (self.islands.iter().enumerate())
                 .map(|(i, island)| (0..island.population.len()).map(|s| (i, s)).collect())
@@ -321,7 +319,7 @@ impl Search {
             // migration's, 1..=islands the islands'), so the run stays a function of its seed.
             let mut rng = ChaCha8Rng::seed_from_u64(config.raw.seed);
             rng.set_stream(config.raw.search.islands as u64 + 1);
-            let sampled: Vec<Individual> = (genomes.into_iter().flatten())
+            let population = (genomes.into_iter().flatten())
                 .zip(outcomes.into_iter().flatten())
                 .map(|(genome, (task, outcome))| Individual {
                     genome,
@@ -329,7 +327,6 @@ impl Search {
                     task,
                 })
                 .collect();
-            let population = fine_best(sampled, population);
             self.children_per_island *= self.islands.len();
             self.islands = vec![Island::from_evaluated(IslandId(0), rng, population)];
             return Ok(());

@@ -331,7 +331,14 @@ impl Island {
 
     /// Slots from the fittest to the least fit (the lower slot first on a tie).
     pub fn ranked_slots(&self) -> Vec<usize> {
-        ranked(&self.population)
+        let pop = &self.population;
+        let mut order: Vec<usize> = (0..pop.len()).collect();
+        order.sort_by(|&a, &b| {
+            (pop[b].outcome.rank())
+                .total_cmp(&pop[a].outcome.rank())
+                .then(a.cmp(&b))
+        });
+        order
     }
 
     /// Index of the least fit individual (the lowest index on a tie).
@@ -349,17 +356,6 @@ impl Island {
     pub fn rng_mut(&mut self) -> &mut ChaCha8Rng {
         &mut self.rng
     }
-}
-
-/// Indices of `individuals` from the fittest down (the lower index first on a tie).
-pub fn ranked(individuals: &[Individual]) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..individuals.len()).collect();
-    order.sort_by(|&a, &b| {
-        (individuals[b].outcome.rank())
-            .total_cmp(&individuals[a].outcome.rank())
-            .then(a.cmp(&b))
-    });
-    order
 }
 
 #[cfg(test)]

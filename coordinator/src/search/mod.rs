@@ -20,5 +20,5 @@ pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,
     genome_distance, migrate,
 };
-pub use resolution::{ResolutionSchedule, ResolutionState, fine_best, merge_order};
+pub use resolution::{ResolutionSchedule, ResolutionState, merge_order};
 pub use variation::{CrossoverParams, LocalSearchParams, StepAdaptation, StepRule, Variation};

@@ -5,7 +5,7 @@
 
 use amorph::voxel::GridDims;
 
-use super::island::{Individual, Island, ranked};
+use super::island::Island;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -30,13 +30,6 @@ pub struct ResolutionSchedule {
     /// well but arrive at the fine one barely bred (docs/evolution.md, session 17).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub merge_islands: bool,
-    /// With `merge_islands`, how many of the islands' designs (taken in the same turns) are
-    /// re-evaluated at the finer level; the merged island keeps the `population` of them the finer
-    /// level scores best. Unset (the default): `population`, every one kept. A coarse grid's best
-    /// can score far worse on the fine one (docs/evolution.md, session 18), so a larger sample
-    /// selects for designs that transfer, at the cost of its extra re-evaluations.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub merge_sample: Option<usize>,
 }
 
 fn default_stall_epochs() -> usize {
@@ -54,7 +47,6 @@ impl ResolutionSchedule {
             min_improvement: default_min_improvement(),
             latest_switch: Vec::new(),
             merge_islands: false,
-            merge_sample: None,
         }
     }
 
@@ -178,21 +170,6 @@ pub fn merge_order(islands: &[Island], count: usize) -> Vec<(usize, usize)> {
     chosen
 }
 
-/// The `count` individuals the finer level scores best, in the order they were sampled (a tie
-/// keeps the earlier one), so a sample no larger than `count` is kept whole and unchanged.
-pub fn fine_best(sampled: Vec<Individual>, count: usize) -> Vec<Individual> {
-    if sampled.len() <= count {
-        return sampled;
-    }
-    let mut keep = vec![false; sampled.len()];
-    for &i in &ranked(&sampled)[..count] {
-        keep[i] = true;
-    }
-    (sampled.into_iter().zip(keep))
-        .filter_map(|(ind, k)| k.then_some(ind))
-        .collect()
-}
-
 impl Default for ResolutionState {
     fn default() -> Self {
         Self::new()
@@ -211,7 +188,6 @@ mod tests {
             min_improvement: 0.1,
             latest_switch: vec![],
             merge_islands: false,
-            merge_sample: None,
         };
         let mut s = ResolutionState::new();
         assert!(!s.observe(-10.0, 10, &schedule));
@@ -235,7 +211,6 @@ mod tests {
             min_improvement: 0.01,
             latest_switch: vec![100, 250],
             merge_islands: false,
-            merge_sample: None,
         };
         let mut s = ResolutionState::new();
         let mut best = -100.0;
@@ -258,7 +233,6 @@ mod tests {
             min_improvement: 0.01,
             latest_switch,
             merge_islands: false,
-            merge_sample: None,
         };
         assert!(schedule(vec![]).validate().is_ok());
         assert!(schedule(vec![100, 200]).validate().is_ok());
@@ -297,28 +271,5 @@ mod tests {
         islands[2].population[1].genome = islands[0].population[1].genome.clone();
         assert_eq!(order(&islands, 8), "01 10 02 11 22 00 20 21");
         assert_eq!(order(&islands, 3), "01 10 02");
-    }
-
-    /// A sample larger than the merged population keeps the designs the finer level scores best,
-    /// a failed one never among them while a scored one is left, in the order they were sampled
-    /// (ties by that order too); a sample no larger than the population is kept whole.
-    #[test]
-    fn a_larger_sample_keeps_its_finest_scored_designs_in_sampled_order() {
-        use crate::search::fixtures::{failed, island};
-        let mut sampled = island(
-            0,
-            &[0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
-            &[-4.0, -1.0, -3.0, -2.0, -2.0, -0.5],
-        )
-        .population;
-        sampled[5].outcome = failed();
-        // Each kept individual by its sampled position (the fixture's task id).
-        let names =
-            |kept: &[Individual]| -> Vec<u64> { kept.iter().map(|ind| ind.task.0).collect() };
-        assert_eq!(names(&fine_best(sampled.clone(), 3)), [1, 3, 4]);
-        assert_eq!(names(&fine_best(sampled.clone(), 2)), [1, 3]);
-        assert_eq!(names(&fine_best(sampled.clone(), 5)), [0, 1, 2, 3, 4]);
-        assert_eq!(names(&fine_best(sampled.clone(), 6)), names(&sampled));
-        assert_eq!(names(&fine_best(sampled.clone(), 9)), names(&sampled));
     }
 }
