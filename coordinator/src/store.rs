@@ -65,6 +65,8 @@ pub enum Purpose {
     Initial,
     Child,
     Reevaluation,
+    /// The run's best at a coarse level, evaluated at the finest (`resolution.stall_on_finest`).
+    FinestCheck,
 }
 
 impl Purpose {
@@ -73,6 +75,7 @@ impl Purpose {
             Self::Initial => "initial",
             Self::Child => "child",
             Self::Reevaluation => "reevaluation",
+            Self::FinestCheck => "finest_check",
         }
     }
 }

@@ -297,3 +297,137 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
     assert_eq!(steps[s - 1], 8 + 12, "{steps:?}");
     assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
 }
+
+fn finest_config(results_dir: &Path, evaluations: u64) -> RunConfig {
+    let sections = format!(
+        r#"
+[search]
+population = 8
+islands = 2
+children_per_epoch = 6
+initial_points = 40
+[search.local_search]
+fraction = 0.5
+step = 0.02
+shared = true
+[budget]
+evaluations = {evaluations}
+[resolution]
+levels = [[4, 12, 4], [6, 18, 6]]
+stall_epochs = 3
+min_improvement = 0.02
+stall_on_finest = true
+"#
+    );
+    circular_arc("finest", 5, results_dir, &sections)
+}
+
+/// `resolution.stall_on_finest`: at the coarse level the run's best is evaluated at the finest
+/// level each time it changes, and the switch comes when those scores stall, exactly where the
+/// stall rule applied to the stored checks puts it; the run is bit-identical on 1 and 3 threads
+/// and when interrupted at the coarse level and resumed.
+#[test]
+fn a_coarse_level_gives_way_when_its_best_stops_improving_on_the_finest_grid() {
+    let dirs = [
+        scratch_dir("finest-1"),
+        scratch_dir("finest-3"),
+        scratch_dir("finest-resumed"),
+    ];
+    let one = run_locally(&finest_config(&dirs[0], 400), 1);
+    let three = run_locally(&finest_config(&dirs[1], 400), 3);
+    assert_eq!(fingerprint(&one), fingerprint(&three));
+
+    let db = rusqlite::Connection::open(finest_config(&dirs[0], 400).run_dir().join("run.sqlite"))
+        .unwrap();
+    let query = |sql: &str| -> Vec<(i64, String, String, f64)> {
+        let mut stmt = db.prepare(sql).unwrap();
+        stmt.query_map([], |r| {
+            Ok((
+                r.get(0)?,
+                r.get(1)?,
+                r.get(2)?,
+                r.get::<_, Option<f64>>(3)?.unwrap_or(f64::NEG_INFINITY),
+            ))
+        })
+        .unwrap()
+        .map(Result::unwrap)
+        .collect()
+    };
+    let checks = query(
+        "SELECT epoch, resolution, genome, fitness FROM evaluation
+         WHERE purpose = 'finest_check' ORDER BY task_id",
+    );
+    let switch = query(
+        "SELECT epoch, resolution, genome, fitness FROM evaluation WHERE purpose = 'reevaluation'",
+    );
+    assert_eq!(switch.len(), 16, "both islands re-evaluated once");
+    let switch = switch[0].0;
+    // Checks happen at the coarse level only, at the finest resolution, one per epoch at most,
+    // never twice in a row on the same genome.
+    assert!(checks.len() >= 2, "{checks:?}");
+    assert!(
+        checks
+            .iter()
+            .all(|c| c.1 == "6x18x6" && (1..=switch).contains(&c.0))
+    );
+    assert!(
+        checks
+            .windows(2)
+            .all(|w| w[0].0 < w[1].0 && w[0].2 != w[1].2)
+    );
+    // The stall rule on the checks' running best gives the switch's epoch.
+    let (mut last_progress, mut without, mut expected) = (f64::NEG_INFINITY, 0, None);
+    let mut watched = f64::NEG_INFINITY;
+    for epoch in 1..=switch {
+        for c in checks.iter().filter(|c| c.0 == epoch) {
+            watched = watched.max(c.3);
+        }
+        let threshold = last_progress + 0.02 * last_progress.abs();
+        if watched > threshold || !last_progress.is_finite() {
+            (last_progress, without) = (watched, 0);
+        } else {
+            without += 1;
+        }
+        if without >= 3 {
+            expected = Some(epoch);
+            break;
+        }
+    }
+    assert_eq!(expected, Some(switch), "checks {checks:?}");
+
+    // Stopped at the coarse level (a check in its last epoch), then extended.
+    let first_check_after = |e: i64| {
+        checks
+            .iter()
+            .find(|c| c.0 > e)
+            .map(|c| c.0)
+            .expect("a later check")
+    };
+    let stop_epoch = first_check_after(1);
+    let stop_at = {
+        let evals: i64 = db
+            .query_row(
+                "SELECT evaluations FROM epoch WHERE epoch = ?1",
+                [stop_epoch],
+                |r| r.get(0),
+            )
+            .unwrap();
+        evals as u64
+    };
+    let first = run_locally(&finest_config(&dirs[2], stop_at), 1);
+    assert_eq!(first.evaluations, stop_at);
+    let config = finest_config(&dirs[2], 400);
+    let store = RunStore::resume(&config).expect("the stopped run's store");
+    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), 2);
+    let resumed = run(
+        &config,
+        &mut evaluator,
+        &RunContext {
+            store: &store,
+            shutdown: &AtomicBool::new(false),
+            progress: &Progress::hidden(),
+        },
+    )
+    .expect("the resumed run completes");
+    assert_eq!(fingerprint(&resumed), fingerprint(&one));
+}

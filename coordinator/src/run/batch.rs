@@ -29,7 +29,7 @@ pub(super) fn evaluate_all(
 ) -> Result<Vec<Vec<Evaluated>>> {
     let epoch = match purpose {
         Purpose::Child => search.epoch + 1,
-        Purpose::Initial | Purpose::Reevaluation => search.epoch,
+        Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => search.epoch,
     };
     let resolution = dims.to_string();
     let mut tasks = Vec::new();

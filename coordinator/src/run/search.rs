@@ -43,6 +43,10 @@ pub(super) struct Search {
     /// Children each island breeds per epoch: the configured count, times the islands merged
     /// into one at a resolution switch (`resolution.merge_islands`), so the batch stays the same.
     children_per_island: usize,
+    /// With `resolution.stall_on_finest`: the last best genome evaluated at the finest level at
+    /// this coarse level, and the best rank such a check has given (what the stall rule watches).
+    finest_checked: Option<Genome>,
+    finest_best: f64,
 }
 
 /// Wall time of the run across sessions: what earlier sessions used plus this session's time.
@@ -112,6 +116,8 @@ impl Search {
             },
             breeding,
             children_per_island: raw.search.children_per_epoch,
+            finest_checked: None,
+            finest_best: f64::NEG_INFINITY,
         };
         let dims = raw.resolution.dims(0);
         let batch = evaluate_all(
@@ -279,15 +285,21 @@ impl Search {
         } else {
             individuals
         } as u64;
+        let watched = if schedule.stall_on_finest && !self.resolution.is_final(schedule) {
+            self.check_on_finest(config, evaluator, ctx)?
+        } else {
+            self.best().outcome.rank()
+        };
         let switch_affordable = config
             .raw
             .budget
             .evaluations
             .is_none_or(|max| max.saturating_sub(self.evaluations) >= reevaluations);
-        let best = self.best().outcome.rank();
-        if !(switch_affordable && self.resolution.observe(best, self.evaluations, schedule)) {
+        if !(switch_affordable && self.resolution.observe(watched, self.evaluations, schedule)) {
             return Ok(());
         }
+        self.finest_checked = None;
+        self.finest_best = f64::NEG_INFINITY;
         let carried: Vec<Vec<(usize, usize)>> = if merge {
             vec![merge_order(&self.islands, config.raw.search.population)]
         } else {
@@ -338,6 +350,42 @@ impl Search {
             }
         }
         Ok(())
+    }
+
+    /// Evaluates the run's best at the finest level when it is not the genome checked last
+    /// (and the budget has room for it), as the task of the island holding it; returns the best
+    /// rank the checks at this level have given.
+    fn check_on_finest(
+        &mut self,
+        config: &RunConfig,
+        evaluator: &mut dyn Evaluator,
+        ctx: &RunContext<'_>,
+    ) -> Result<f64> {
+        let best = self.best();
+        let island = (self.islands.iter())
+            .position(|i| std::ptr::eq(i.best(), best))
+            .expect("the run's best is an island's best");
+        let affordable = (config.raw.budget.evaluations).is_none_or(|max| self.evaluations < max);
+        if !affordable || self.finest_checked.as_ref() == Some(&best.genome) {
+            return Ok(self.finest_best);
+        }
+        let mut genomes = vec![Vec::new(); island + 1];
+        genomes[island].push(best.genome.clone());
+        let dims = config.raw.resolution.finest();
+        let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::FinestCheck, ctx)?;
+        let outcomes = settle(
+            batch,
+            &genomes,
+            dims,
+            evaluator,
+            ctx,
+            &verification::all_decide,
+        )?;
+        let (_, outcome) = &outcomes[island][0];
+        info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %dims, "the run's best checked at the finest level");
+        self.finest_best = self.finest_best.max(outcome.rank());
+        self.finest_checked = genomes.swap_remove(island).pop();
+        Ok(self.finest_best)
     }
 
     pub(super) fn best(&self) -> &Individual {

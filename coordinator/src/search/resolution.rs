@@ -30,6 +30,13 @@ pub struct ResolutionSchedule {
     /// well but arrive at the fine one barely bred (docs/evolution.md, session 17).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub merge_islands: bool,
+    /// At a coarse level, the run's best design is also evaluated at the finest level whenever it
+    /// changes (one evaluation each), and the stall rule watches the best of those scores instead
+    /// of the coarse fitness: a coarse level gives way once it stops finding designs that are
+    /// better on the fine grid. Default false (the coarse fitness, the paper's rule). A coarse
+    /// level's climbed best can score far worse on the fine grid (docs/evolution.md, session 19).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub stall_on_finest: bool,
 }
 
 fn default_stall_epochs() -> usize {
@@ -47,12 +54,18 @@ impl ResolutionSchedule {
             min_improvement: default_min_improvement(),
             latest_switch: Vec::new(),
             merge_islands: false,
+            stall_on_finest: false,
         }
     }
 
     pub fn dims(&self, level: usize) -> GridDims {
         let [nx, ny, nz] = self.levels[level];
         GridDims::new(nx, ny, nz)
+    }
+
+    /// The finest resolution, the last level.
+    pub fn finest(&self) -> GridDims {
+        self.dims(self.levels.len() - 1)
     }
 
     pub fn validate(&self) -> Result<(), String> {
@@ -188,6 +201,7 @@ mod tests {
             min_improvement: 0.1,
             latest_switch: vec![],
             merge_islands: false,
+            stall_on_finest: false,
         };
         let mut s = ResolutionState::new();
         assert!(!s.observe(-10.0, 10, &schedule));
@@ -211,6 +225,7 @@ mod tests {
             min_improvement: 0.01,
             latest_switch: vec![100, 250],
             merge_islands: false,
+            stall_on_finest: false,
         };
         let mut s = ResolutionState::new();
         let mut best = -100.0;
@@ -233,6 +248,7 @@ mod tests {
             min_improvement: 0.01,
             latest_switch,
             merge_islands: false,
+            stall_on_finest: false,
         };
         assert!(schedule(vec![]).validate().is_ok());
         assert!(schedule(vec![100, 200]).validate().is_ok());
