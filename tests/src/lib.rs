@@ -67,13 +67,40 @@ target = "circular_arc"
 /// Runs a config in this process on `threads` evaluation threads: the reference every cluster
 /// run must match bit for bit.
 pub fn run_locally(config: &RunConfig, threads: usize) -> RunSummary {
-    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), threads);
     let store = RunStore::create(config, true).expect("run store");
+    run_on(config, &store, threads)
+}
+
+/// Resumes the stopped run whose store `config` names, in this process, to its end.
+pub fn resume_locally(config: &RunConfig, threads: usize) -> RunSummary {
+    let store = RunStore::resume(config).expect("the stopped run's store");
+    run_on(config, &store, threads)
+}
+
+/// Runs `make`'s config (given a fresh scratch folder) on 1 and on 3 evaluation threads, checks
+/// that the two runs are bit-identical and returns the first with its config.
+pub fn thread_count_blind(
+    test: &str,
+    make: impl Fn(&Path) -> RunConfig,
+) -> (RunSummary, RunConfig) {
+    let config = make(&scratch_dir(&format!("{test}-1")));
+    let one = run_locally(&config, 1);
+    let three = run_locally(&make(&scratch_dir(&format!("{test}-3"))), 3);
+    assert_eq!(
+        fingerprint(&one),
+        fingerprint(&three),
+        "{test}: 1 and 3 threads differ"
+    );
+    (one, config)
+}
+
+fn run_on(config: &RunConfig, store: &RunStore, threads: usize) -> RunSummary {
+    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), threads);
     run(
         config,
         &mut evaluator,
         &RunContext {
-            store: &store,
+            store,
             shutdown: &AtomicBool::new(false),
             progress: &Progress::hidden(),
         },

@@ -4,13 +4,9 @@
 //! island's best; `diversity.csv` records every island after every epoch.
 
 use amorph::genome::Genome;
-use amorph_coordinator::progress::Progress;
-use amorph_coordinator::store::RunStore;
-use amorph_coordinator::{LocalEvaluator, RunConfig, RunContext, run};
-use amorph_tests::{fingerprint, run_locally, scratch_dir};
+use amorph_coordinator::RunConfig;
+use amorph_tests::{fingerprint, resume_locally, run_locally, scratch_dir, thread_count_blind};
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 
 /// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process.
 fn circular_arc(name: &str, seed: u64, results_dir: &Path, sections: &str) -> RunConfig {
@@ -212,37 +208,19 @@ merge_islands = true
 /// interrupted after the merge and resumed (the replay retraces the merge).
 #[test]
 fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
-    let dirs = [
-        scratch_dir("merge-1"),
-        scratch_dir("merge-3"),
-        scratch_dir("merge-resumed"),
-    ];
-    let one = run_locally(&merging_config(&dirs[0], 260), 1);
-    let three = run_locally(&merging_config(&dirs[1], 260), 3);
+    let (one, config) = thread_count_blind("merge", |dir| merging_config(dir, 260));
     assert_eq!(one.evaluations, 260);
     assert_eq!(one.populations.len(), 1);
-    assert_eq!(fingerprint(&one), fingerprint(&three));
+    let resumed_dir = scratch_dir("merge-resumed");
 
     // Stopped at 140 evaluations (after the merge at 108 + 8), then extended to 260.
-    let first = run_locally(&merging_config(&dirs[2], 140), 1);
+    let first = run_locally(&merging_config(&resumed_dir, 140), 1);
     assert_eq!((first.evaluations, first.populations.len()), (140, 1));
-    let config = merging_config(&dirs[2], 260);
-    let store = RunStore::resume(&config).expect("the stopped run's store");
-    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), 2);
-    let resumed = run(
-        &config,
-        &mut evaluator,
-        &RunContext {
-            store: &store,
-            shutdown: &AtomicBool::new(false),
-            progress: &Progress::hidden(),
-        },
-    )
-    .expect("the resumed run completes");
+    let extended = merging_config(&resumed_dir, 260);
+    let resumed = resume_locally(&extended, 2);
     assert_eq!(fingerprint(&resumed), fingerprint(&one));
 
-    let db = rusqlite::Connection::open(merging_config(&dirs[0], 260).run_dir().join("run.sqlite"))
-        .unwrap();
+    let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
     let rows = |sql: &str| -> Vec<(i64, i64, String)> {
         let mut stmt = db.prepare(sql).unwrap();
         stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
@@ -328,17 +306,10 @@ stall_on_finest = true
 /// and when interrupted at the coarse level and resumed.
 #[test]
 fn a_coarse_level_gives_way_when_its_best_stops_improving_on_the_finest_grid() {
-    let dirs = [
-        scratch_dir("finest-1"),
-        scratch_dir("finest-3"),
-        scratch_dir("finest-resumed"),
-    ];
-    let one = run_locally(&finest_config(&dirs[0], 400), 1);
-    let three = run_locally(&finest_config(&dirs[1], 400), 3);
-    assert_eq!(fingerprint(&one), fingerprint(&three));
+    let (one, config) = thread_count_blind("finest", |dir| finest_config(dir, 400));
+    let resumed_dir = scratch_dir("finest-resumed");
 
-    let db = rusqlite::Connection::open(finest_config(&dirs[0], 400).run_dir().join("run.sqlite"))
-        .unwrap();
+    let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
     let query = |sql: &str| -> Vec<(i64, String, String, f64)> {
         let mut stmt = db.prepare(sql).unwrap();
         stmt.query_map([], |r| {
@@ -414,20 +385,9 @@ fn a_coarse_level_gives_way_when_its_best_stops_improving_on_the_finest_grid() {
             .unwrap();
         evals as u64
     };
-    let first = run_locally(&finest_config(&dirs[2], stop_at), 1);
+    let first = run_locally(&finest_config(&resumed_dir, stop_at), 1);
     assert_eq!(first.evaluations, stop_at);
-    let config = finest_config(&dirs[2], 400);
-    let store = RunStore::resume(&config).expect("the stopped run's store");
-    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), 2);
-    let resumed = run(
-        &config,
-        &mut evaluator,
-        &RunContext {
-            store: &store,
-            shutdown: &AtomicBool::new(false),
-            progress: &Progress::hidden(),
-        },
-    )
-    .expect("the resumed run completes");
+    let extended = finest_config(&resumed_dir, 400);
+    let resumed = resume_locally(&extended, 2);
     assert_eq!(fingerprint(&resumed), fingerprint(&one));
 }

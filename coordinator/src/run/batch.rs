@@ -150,3 +150,24 @@ pub(super) fn settle(
         .map(|g| g.into_iter().map(|e| (e.task, e.outcome)).collect())
         .collect())
 }
+
+/// [`evaluate_all`] then [`settle`] with every claim decisive: a batch whose every outcome the
+/// search keeps (initial populations, re-evaluations, checks at the finest level).
+pub(super) fn evaluate_settled(
+    search: &mut Search,
+    evaluator: &mut dyn Evaluator,
+    genomes: &[Vec<Genome>],
+    dims: GridDims,
+    purpose: Purpose,
+    ctx: &RunContext<'_>,
+) -> Result<Vec<Vec<(TaskId, Outcome)>>> {
+    let batch = evaluate_all(search, evaluator, genomes, dims, purpose, ctx)?;
+    settle(
+        batch,
+        genomes,
+        dims,
+        evaluator,
+        ctx,
+        &verification::all_decide,
+    )
+}

@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tracing::info;
 
-use super::batch::{evaluate_all, settle};
+use super::batch::{evaluate_all, evaluate_settled, settle};
 use super::{Result, RunContext, RunError};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
@@ -25,7 +25,7 @@ use crate::search::{
 };
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
-use crate::verification::{self, Evaluated};
+use crate::verification::Evaluated;
 
 pub(super) struct Search {
     pub(super) islands: Vec<Island>,
@@ -120,21 +120,13 @@ impl Search {
             finest_best: f64::NEG_INFINITY,
         };
         let dims = raw.resolution.dims(0);
-        let batch = evaluate_all(
+        let outcomes = evaluate_settled(
             &mut search,
             evaluator,
             &initial,
             dims,
             Purpose::Initial,
             ctx,
-        )?;
-        let outcomes = settle(
-            batch,
-            &initial,
-            dims,
-            evaluator,
-            ctx,
-            &verification::all_decide,
         )?;
         search.islands = initial
             .into_iter()
@@ -317,15 +309,8 @@ impl Search {
                     .collect()
             })
             .collect();
-        let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Reevaluation, ctx)?;
-        let outcomes = settle(
-            batch,
-            &genomes,
-            dims,
-            evaluator,
-            ctx,
-            &verification::all_decide,
-        )?;
+        let outcomes =
+            evaluate_settled(self, evaluator, &genomes, dims, Purpose::Reevaluation, ctx)?;
         if merge {
             // The merged island draws from the stream after the islands' own (stream 0 is
             // migration's, 1..=islands the islands'), so the run stays a function of its seed.
@@ -372,15 +357,8 @@ impl Search {
         let mut genomes = vec![Vec::new(); island + 1];
         genomes[island].push(best.genome.clone());
         let dims = config.raw.resolution.finest();
-        let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::FinestCheck, ctx)?;
-        let outcomes = settle(
-            batch,
-            &genomes,
-            dims,
-            evaluator,
-            ctx,
-            &verification::all_decide,
-        )?;
+        let outcomes =
+            evaluate_settled(self, evaluator, &genomes, dims, Purpose::FinestCheck, ctx)?;
         let (_, outcome) = &outcomes[island][0];
         info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %dims, "the run's best checked at the finest level");
         self.finest_best = self.finest_best.max(outcome.rank());
