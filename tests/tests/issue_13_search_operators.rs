@@ -307,7 +307,6 @@ stall_on_finest = true
 #[test]
 fn a_coarse_level_gives_way_when_its_best_stops_improving_on_the_finest_grid() {
     let (one, config) = thread_count_blind("finest", |dir| finest_config(dir, 400));
-    let resumed_dir = scratch_dir("finest-resumed");
 
     let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
     let query = |sql: &str| -> Vec<(i64, String, String, f64)> {
@@ -366,25 +365,18 @@ fn a_coarse_level_gives_way_when_its_best_stops_improving_on_the_finest_grid() {
     }
     assert_eq!(expected, Some(switch), "checks {checks:?}");
 
-    // Stopped at the coarse level (a check in its last epoch), then extended.
-    let first_check_after = |e: i64| {
-        checks
-            .iter()
-            .find(|c| c.0 > e)
-            .map(|c| c.0)
-            .expect("a later check")
-    };
-    let stop_epoch = first_check_after(1);
-    let stop_at = {
-        let evals: i64 = db
-            .query_row(
-                "SELECT evaluations FROM epoch WHERE epoch = ?1",
-                [stop_epoch],
-                |r| r.get(0),
-            )
-            .unwrap();
-        evals as u64
-    };
+    // Stopped at the end of the second check's epoch, before that check (the budget has no room
+    // left for it), then extended: the resumed session replays the first check and makes the
+    // second.
+    let stop_at: i64 = db
+        .query_row(
+            "SELECT evaluations FROM epoch WHERE epoch = ?1",
+            [checks[1].0],
+            |r| r.get(0),
+        )
+        .unwrap();
+    let stop_at = stop_at as u64;
+    let resumed_dir = scratch_dir("finest-resumed");
     let first = run_locally(&finest_config(&resumed_dir, stop_at), 1);
     assert_eq!(first.evaluations, stop_at);
     let extended = finest_config(&resumed_dir, 400);
