@@ -2,7 +2,7 @@
 # Checks the cluster recipes beyond one machine, as far as this machine allows (run by .ci/run):
 # - the Kubernetes manifests validate against the Kubernetes API schemas (kubernetes-validate from
 #   PyPI, installed into a virtualenv under target/), and a broken manifest is caught;
-# - the shell scripts, including the Slurm batch script, parse.
+# - the shell scripts, including the Slurm batch script, parse, and study.sh --set edits a config.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -21,4 +21,29 @@ if "$venv/bin/kubernetes-validate" --strict --quiet "$broken" >/dev/null 2>&1; t
   exit 1
 fi
 for script in deploy/*.sh deploy/slurm/amorph.sbatch; do bash -n "$script"; done
-echo "check-recipes: Kubernetes manifests valid, scripts parse"
+# study.sh --set (the docs' study commands rely on it): each value lands in its own section, a
+# missing section is added, the rest of the config is kept, and a malformed --set stops the study.
+study="$(mktemp -d)"
+trap 'rm -f "$broken"; rm -rf "$study"' EXIT
+printf '#!/bin/sh\ncp "$2" "%s/seen.toml"\n' "$study" > "$study/coordinator"
+chmod +x "$study/coordinator"
+COORDINATOR="$study/coordinator" deploy/study.sh run "$study/out" configs/circular_arc_finest4.toml \
+  --set scene.target=straight --set search.islands=16 --set search.migration.interval=7 \
+  --target 0.10 --label set 3 2>/dev/null
+python3 - "$study/seen.toml" <<'EOF'
+import sys, tomllib
+c = tomllib.load(open(sys.argv[1], "rb"))
+s = c.get("search", {})
+got = (c.get("name"), c.get("seed"), c.get("scene", {}).get("target"), s.get("islands"),
+       s.get("children_per_epoch"), s.get("migration", {}).get("interval"),
+       c.get("budget", {}).get("target_rms_percent"), c.get("resolution", {}).get("stall_on_finest"))
+want = ("set-s3", 3, "straight", 16, 12, 7, 0.10, True)
+if got != want:
+    sys.exit(f"check-recipes: study.sh --set wrote {got}, expected {want}")
+EOF
+if COORDINATOR="$study/coordinator" deploy/study.sh run "$study/out" configs/circular_arc_finest4.toml \
+  --set islands=16 --label bad 1 >/dev/null 2>&1; then
+  echo "check-recipes: study.sh accepted --set without a section" >&2
+  exit 1
+fi
+echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs"
