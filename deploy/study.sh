@@ -123,34 +123,28 @@ for out in sys.argv[1:]:
         final = "x".join(str(n) for n in config["resolution"]["levels"][-1])
         rows = list(csv.DictReader(open(run / "history.csv")))
         rms_key = next(k for k in rows[0] if k.startswith("best_") and k != "best_fitness")
-        best, first, evals, wall, start = None, {}, 0, 0.0, None
         paper = PAPER.get(target)
-        for r in rows:
-            evals, wall = int(r["evaluations"]), float(r["wall_seconds"])
-            if r["resolution"] != final or not r[rms_key]:
-                continue
-            # The final level's first epoch: its count includes the switch's re-evaluations and
-            # that epoch's children, so "reached paper at" minus it is the final level's share.
-            start = evals if start is None else start
-            v = float(r[rms_key])
-            best = v if best is None else min(best, v)
-            for name, level in (("paper", paper), ("half", paper and paper / 2)):
-                if level is not None and v <= level and name not in first:
-                    first[name] = evals
+        # (evaluations, best RMS) at the final level, in order; the first one's count includes the
+        # switch's re-evaluations and that epoch's children.
+        points = [(int(r["evaluations"]), float(r[rms_key])) for r in rows
+                  if r["resolution"] == final and r[rms_key]]
+        evals, wall = int(rows[-1]["evaluations"]), float(rows[-1]["wall_seconds"])
         summary = run / "summary.json"
         summary = json.loads(summary.read_text()) if summary.exists() else {}
         stop = summary.get("stop", "running")
         wall = summary.get("wall_seconds", wall)
         # A run can meet its target in the re-evaluation at a switch, before the final level's
         # first epoch writes a history row: then only the summary has the final state.
-        done = summary.get("best_rms_percent")
-        if done is not None and summary.get("resolution") == final:
+        if summary.get("best_rms_percent") is not None and summary.get("resolution") == final:
             evals = summary["evaluations"]
-            start = evals if start is None else start
-            best = done if best is None else min(best, done)
-            for name, level in (("paper", paper), ("half", paper and paper / 2)):
-                if level is not None and done <= level and name not in first:
-                    first[name] = evals
+            points.append((evals, summary["best_rms_percent"]))
+        start = points[0][0] if points else None
+        best = min((v for _, v in points), default=None)
+        first = {}
+        for name, level in (("paper", paper), ("half", paper and paper / 2)):
+            hit = next((n for n, v in points if level is not None and v <= level), None)
+            if hit is not None:
+                first[name] = hit
         fmt = lambda v: "–" if v is None else f"{v:.4g}"
         print(f"| {run.name} | {target} | {config['seed']} | {evals} | {stop} | {start or '–'} | {fmt(best)} | "
               f"{fmt(paper)} | {first.get('paper', '–')} | {first.get('half', '–')} | {wall:.0f} |")
