@@ -2,7 +2,8 @@
 # Checks the cluster recipes beyond one machine, as far as this machine allows (run by .ci/run):
 # - the Kubernetes manifests validate against the Kubernetes API schemas (kubernetes-validate from
 #   PyPI, installed into a virtualenv under target/), and a broken manifest is caught;
-# - the shell scripts, including the Slurm batch script, parse, and study.sh --set edits a config.
+# - the shell scripts, including the Slurm batch script, parse; study.sh --set edits a config, and
+#   study.sh summary ranks settings.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -46,4 +47,25 @@ if COORDINATOR="$study/coordinator" deploy/study.sh run "$study/out" configs/cir
   echo "check-recipes: study.sh accepted --set without a section" >&2
   exit 1
 fi
-echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs"
+# study.sh summary (the docs' island curves rely on it): two settings of two runs each, one run
+# stopped short of the paper's value, which counts as later than any run that reached it.
+fake_run() { # <name> <seed> <evaluations at which the paper's 0.10 % was reached, or "never">
+  local dir="$study/sum/$1-s$2"
+  mkdir -p "$dir"
+  printf 'seed = %s\n[scene]\ntarget = "straight"\n[resolution]\nlevels = [[12, 40, 12]]\n' "$2" > "$dir/config.toml"
+  printf 'epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_rms_percent\n' > "$dir/history.csv"
+  printf '1,100,1.0,12x40x12,0,-1,0.5\n' >> "$dir/history.csv"
+  if [ "$3" = never ]; then stop=budget; else stop=target_reached
+    printf '2,%s,2.0,12x40x12,0,-1,0.09\n' "$3" >> "$dir/history.csv"; fi
+  printf '{"stop": "%s"}' "$stop" > "$dir/summary.json"
+}
+fake_run stra-1x48 1 1000; fake_run stra-1x48 2 3000
+fake_run stra-16x3 1 2000; fake_run stra-16x3 2 never
+got=$(deploy/study.sh summary "$study/sum" | tail -n 2)
+want='| straight | stra-1x48 | 2 | 2 | 2,000 | 1,000–3,000 | – |
+| straight | stra-16x3 | 2 | 1 | beyond | 2,000–beyond | 0.25 |'
+if [ "$got" != "$want" ]; then
+  printf 'check-recipes: study.sh summary printed\n%s\nexpected\n%s\n' "$got" "$want" >&2
+  exit 1
+fi
+echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs, study.sh summary ranks settings"

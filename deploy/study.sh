@@ -5,6 +5,7 @@
 #   deploy/study.sh run <out> <config.toml> [--extra <snippet.toml>] [--set <section.key=value>]...
 #                       [--target <rms %>] [--label <l>] <seed>...
 #   deploy/study.sh table <out> [<out>...]
+#   deploy/study.sh summary <out> [<out>...]
 #
 # `run` copies the config per seed with `name = <label>-s<seed>`, `seed = <seed>` and
 # `results_dir = <out>`, appends the TOML snippet (sections the config does not already have,
@@ -15,11 +16,15 @@
 # config.toml, summary.json and history.csv: the best RMS error at the final resolution, and the
 # evaluations at which the run first reached the paper's simulated error (Table III) and half of it,
 # and the count at the final level's first epoch (how many of them the coarser levels took).
+# `summary` prints one row per setting (runs named <setting>-s<seed>) and target over the finished
+# runs: how many reached the paper's value, the median and quartiles of the evaluations to it (a run
+# that stopped short counts as beyond any budget), and the probability that a run of the setting
+# gets there before a run of the setting with the fewest islands (the number before "x" in its name).
 # COORDINATOR overrides the binary (default target/release/coordinator).
 set -euo pipefail
 
 usage() {
-    sed -n '4,7p' "$0" | sed 's/^# *//' >&2
+    sed -n '4,8p' "$0" | sed 's/^# *//' >&2
     exit 2
 }
 
@@ -109,45 +114,89 @@ EOF
 
 table() {
     python3 - "$@" <<'EOF'
-import csv, json, pathlib, sys, tomllib
+import csv, json, math, pathlib, re, sys, tomllib
 
 # The paper's simulated RMS errors (Table III), percent of the tip deflection.
 PAPER = {"straight": 0.10, "circular_arc": 0.10, "discontinuous_slope": 0.86, "polynomial4": 0.90}
 
-print("| run | target | seed | evaluations | stop | final level from | best RMS % (final level) | paper | reached paper at | reached half at | wall s |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
-for out in sys.argv[1:]:
-    for run in sorted(p for p in pathlib.Path(out).iterdir() if (p / "history.csv").exists()):
-        config = tomllib.loads((run / "config.toml").read_text())
-        target = config.get("scene", {}).get("target")
-        final = "x".join(str(n) for n in config["resolution"]["levels"][-1])
-        rows = list(csv.DictReader(open(run / "history.csv")))
-        rms_key = next(k for k in rows[0] if k.startswith("best_") and k != "best_fitness")
-        paper = PAPER.get(target)
-        # (evaluations, best RMS) at the final level, in order; the first one's count includes the
-        # switch's re-evaluations and that epoch's children.
-        points = [(int(r["evaluations"]), float(r[rms_key])) for r in rows
-                  if r["resolution"] == final and r[rms_key]]
-        evals, wall = int(rows[-1]["evaluations"]), float(rows[-1]["wall_seconds"])
-        summary = run / "summary.json"
-        summary = json.loads(summary.read_text()) if summary.exists() else {}
-        stop = summary.get("stop", "running")
-        wall = summary.get("wall_seconds", wall)
-        # A run can meet its target in the re-evaluation at a switch, before the final level's
-        # first epoch writes a history row: then only the summary has the final state.
-        if summary.get("best_rms_percent") is not None and summary.get("resolution") == final:
-            evals = summary["evaluations"]
-            points.append((evals, summary["best_rms_percent"]))
-        start = points[0][0] if points else None
-        best = min((v for _, v in points), default=None)
-        first = {}
-        for name, level in (("paper", paper), ("half", paper and paper / 2)):
-            hit = next((n for n, v in points if level is not None and v <= level), None)
-            if hit is not None:
-                first[name] = hit
-        fmt = lambda v: "–" if v is None else f"{v:.4g}"
-        print(f"| {run.name} | {target} | {config['seed']} | {evals} | {stop} | {start or '–'} | {fmt(best)} | "
-              f"{fmt(paper)} | {first.get('paper', '–')} | {first.get('half', '–')} | {wall:.0f} |")
+
+def read(run):
+    """One run: what its config, summary.json and history.csv say."""
+    config = tomllib.loads((run / "config.toml").read_text())
+    target = config.get("scene", {}).get("target")
+    final = "x".join(str(n) for n in config["resolution"]["levels"][-1])
+    rows = list(csv.DictReader(open(run / "history.csv")))
+    rms_key = next(k for k in rows[0] if k.startswith("best_") and k != "best_fitness")
+    paper = PAPER.get(target)
+    # (evaluations, best RMS) at the final level, in order; the first one's count includes the
+    # switch's re-evaluations and that epoch's children.
+    points = [(int(r["evaluations"]), float(r[rms_key])) for r in rows
+              if r["resolution"] == final and r[rms_key]]
+    evals, wall = int(rows[-1]["evaluations"]), float(rows[-1]["wall_seconds"])
+    summary = run / "summary.json"
+    summary = json.loads(summary.read_text()) if summary.exists() else {}
+    # A run can meet its target in the re-evaluation at a switch, before the final level's
+    # first epoch writes a history row: then only the summary has the final state.
+    if summary.get("best_rms_percent") is not None and summary.get("resolution") == final:
+        evals = summary["evaluations"]
+        points.append((evals, summary["best_rms_percent"]))
+    first = {}
+    for name, level in (("paper", paper), ("half", paper and paper / 2)):
+        hit = next((n for n, v in points if level is not None and v <= level), None)
+        if hit is not None:
+            first[name] = hit
+    return {
+        "name": run.name, "label": re.sub(r"-s\d+$", "", run.name), "target": target,
+        "seed": config["seed"], "evaluations": evals, "stop": summary.get("stop", "running"),
+        "start": points[0][0] if points else None, "best": min((v for _, v in points), default=None),
+        "paper": paper, "first": first, "wall": summary.get("wall_seconds", wall),
+    }
+
+
+mode, outs = sys.argv[1], sys.argv[2:]
+runs = [read(run) for out in outs for run in sorted(pathlib.Path(out).iterdir())
+        if (run / "history.csv").exists()]
+fmt = lambda v: "–" if v is None else f"{v:.4g}"
+if mode == "table":
+    print("| run | target | seed | evaluations | stop | final level from | best RMS % (final level) | paper | reached paper at | reached half at | wall s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in runs:
+        print(f"| {r['name']} | {r['target']} | {r['seed']} | {r['evaluations']} | {r['stop']} | {r['start'] or '–'} | "
+              f"{fmt(r['best'])} | {fmt(r['paper'])} | {r['first'].get('paper', '–')} | {r['first'].get('half', '–')} | {r['wall']:.0f} |")
+    sys.exit()
+
+# summary: one row per setting (a run's name less its "-s<seed>"), over its finished runs. A run
+# that stopped short of the paper's value counts as infinitely late, so the median is the seeds'
+# median whatever the budget; a run still going is left out.
+def median(xs):
+    xs, n = sorted(xs), len(xs)
+    return xs[n // 2] if n % 2 else (xs[n // 2 - 1] + xs[n // 2]) / 2
+
+def faster(a, b):
+    """Probability that a run of `a` reaches the paper's value before a run of `b` (ties half):
+    seeds are not paired across settings, so settings compare as samples."""
+    pairs = [(x, y) for x in a for y in b]
+    return sum(1.0 if x < y else 0.5 if x == y else 0.0 for x, y in pairs) / len(pairs)
+
+groups = {}
+for r in runs:
+    if r["stop"] != "running":
+        groups.setdefault(r["target"], {}).setdefault(r["label"], []).append(r["first"].get("paper", math.inf))
+show = lambda v: "beyond" if v == math.inf else f"{v:,.0f}"
+print("| target | setting | runs | reached the paper's value | median evaluations to it | quartiles | P(faster than the first setting) |")
+print("|---|---|---|---|---|---|---|")
+for target in sorted(groups, key=str):
+    # Settings in order of their island count (the number before an "x" in the label, as in
+    # "stra-16x3"), the first being the reference: one island, where the study has it.
+    islands = lambda l: int(m.group(1)) if (m := re.search(r"(?:^|-)(\d+)x", l)) else math.inf
+    labels = sorted(groups[target], key=lambda l: (islands(l), l))
+    base = groups[target][labels[0]]
+    for label in labels:
+        hits = sorted(groups[target][label])
+        q = lambda f: hits[round(f * (len(hits) - 1))]
+        p = "–" if label == labels[0] else f"{faster(hits, base):.2f}"
+        print(f"| {target} | {label} | {len(hits)} | {sum(h != math.inf for h in hits)} | {show(median(hits))} | "
+              f"{show(q(0.25))}–{show(q(0.75))} | {p} |")
 EOF
 }
 
@@ -157,9 +206,8 @@ run)
     [[ $# -ge 3 ]] || usage
     run "$@"
     ;;
-table)
-    shift
-    [[ $# -ge 1 ]] || usage
+table | summary)
+    [[ $# -ge 2 ]] || usage
     table "$@"
     ;;
 *) usage ;;

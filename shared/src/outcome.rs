@@ -12,7 +12,11 @@ pub enum Failure {
     InvalidGenome(String),
     #[error("invalid request: {0}")]
     InvalidRequest(String),
-    #[error("the design has no voxels")]
+    /// No voxel the task can use: a beam keeps only what is connected to its clamped layer, so a
+    /// design whose root layer comes out empty at some resolution is empty there.
+    #[error(
+        "the design has no voxels the task can use (a beam: none connected to its clamped layer)"
+    )]
     Empty,
     #[error("the design does not reach the free-end layer")]
     NotSpanning,

@@ -116,10 +116,8 @@ impl FinerCheck {
             (Some(a), Some(b)) if a != 0.0 => Some((b - a) / a.abs()),
             _ => None,
         };
-        if check.finer_fitness.is_none() {
-            check.note = Some(format!(
-                "the evaluation at {finer} failed: {finer_outcome:?}"
-            ));
+        if let Outcome::Failed { failure } = &finer_outcome {
+            check.note = Some(format!("the evaluation at {finer} failed: {failure}"));
         }
         check
     }
