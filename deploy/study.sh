@@ -185,10 +185,10 @@ for r in runs:
 show = lambda v: "beyond" if v == math.inf else f"{v:,.0f}"
 print("| target | setting | runs | reached the paper's value | median evaluations to it | quartiles | P(faster than the first setting) |")
 print("|---|---|---|---|---|---|---|")
+# Settings in order of their island count (the number before an "x" in the label, as in
+# "stra-16x3"), the first being the reference: one island, where the study has it.
+islands = lambda l: int(m.group(1)) if (m := re.search(r"(?:^|-)(\d+)x", l)) else math.inf
 for target in sorted(groups, key=str):
-    # Settings in order of their island count (the number before an "x" in the label, as in
-    # "stra-16x3"), the first being the reference: one island, where the study has it.
-    islands = lambda l: int(m.group(1)) if (m := re.search(r"(?:^|-)(\d+)x", l)) else math.inf
     labels = sorted(groups[target], key=lambda l: (islands(l), l))
     base = groups[target][labels[0]]
     for label in labels:
