@@ -276,6 +276,75 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
     assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
 }
 
+/// `resolution.merged_population`: islands that split one population (three of 4) merge back
+/// into its whole, so the finer grid re-evaluates every design the islands held (12, not
+/// `search.population`'s 4), the merged island keeps all 12 and breeds the 3 x 4 children.
+#[test]
+fn split_islands_merge_back_into_their_whole_population() {
+    let dir = scratch_dir("merge-whole");
+    let sections = r#"
+[search]
+population = 4
+islands = 3
+children_per_epoch = 4
+initial_points = 20
+[budget]
+evaluations = 204
+[resolution]
+levels = [[3, 9, 3], [4, 12, 4]]
+stall_epochs = 1000
+latest_switch = [100]
+merge_islands = true
+merged_population = 12
+"#;
+    let config = circular_arc("merge-whole", 5, &dir, sections);
+    let run = run_locally(&config, 2);
+    assert_eq!((run.evaluations, run.populations.len()), (204, 1));
+    assert_eq!(run.populations[0].len(), 12);
+
+    let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
+    let genomes = |sql: &str| -> Vec<String> {
+        let mut stmt = db.prepare(sql).unwrap();
+        let mut found: Vec<String> = (stmt.query_map([], |r| r.get(0)).unwrap())
+            .map(Result::unwrap)
+            .collect();
+        found.sort();
+        found
+    };
+    let switch: i64 = db
+        .query_row(
+            "SELECT MIN(epoch) FROM evaluation WHERE purpose = 'reevaluation'",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    let carried = genomes("SELECT genome FROM evaluation WHERE purpose = 'reevaluation'");
+    let mut held = genomes(&format!(
+        "SELECT e.genome FROM population p JOIN evaluation e USING (task_id) WHERE p.epoch = {switch}"
+    ));
+    assert_eq!(held.len(), 12);
+    held.dedup();
+    // Every distinct design the three islands held is carried once; migrants' copies are the
+    // only repeats, and they fill what is left of the 12.
+    let mut distinct = carried.clone();
+    distinct.dedup();
+    assert_eq!(carried.len(), 12);
+    assert_eq!(distinct, held);
+    let steps: Vec<i64> = {
+        let mut stmt = db
+            .prepare("SELECT evaluations FROM epoch ORDER BY epoch")
+            .unwrap();
+        let totals: Vec<i64> = (stmt.query_map([], |r| r.get(0)).unwrap())
+            .map(Result::unwrap)
+            .collect();
+        totals.windows(2).map(|w| w[1] - w[0]).collect()
+    };
+    let s = switch as usize;
+    assert!(steps[..s - 1].iter().all(|&d| d == 12), "{steps:?}");
+    assert_eq!(steps[s - 1], 12 + 12, "{steps:?}");
+    assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
+}
+
 fn finest_config(results_dir: &Path, evaluations: u64) -> RunConfig {
     let sections = format!(
         r#"

@@ -260,7 +260,8 @@ impl Search {
     }
 
     /// Moves to the next resolution once progress stalls there, re-evaluating every population
-    /// (or, with `resolution.merge_islands`, the islands' best in turn as one population). With
+    /// (or, with `resolution.merge_islands`, the islands' best in turn as one population of
+    /// `resolution.merged_population`). With
     /// less budget left than that re-evaluation, the run ends at the current level rather than
     /// overshoot its evaluation budget.
     pub(super) fn switch_if_stalled(
@@ -271,9 +272,12 @@ impl Search {
     ) -> Result<()> {
         let schedule = &config.raw.resolution;
         let merge = schedule.merge_islands && self.islands.len() > 1;
+        let merged = schedule
+            .merged_population
+            .unwrap_or(config.raw.search.population);
         let individuals: usize = self.islands.iter().map(|i| i.population.len()).sum();
         let reevaluations = if merge {
-            individuals.min(config.raw.search.population)
+            individuals.min(merged)
         } else {
             individuals
         } as u64;
@@ -293,7 +297,7 @@ impl Search {
         self.finest_checked = None;
         self.finest_best = f64::NEG_INFINITY;
         let carried: Vec<Vec<(usize, usize)>> = if merge {
-            vec![merge_order(&self.islands, config.raw.search.population)]
+            vec![merge_order(&self.islands, merged)]
         } else {
             (self.islands.iter().enumerate())
                 .map(|(i, island)| (0..island.population.len()).map(|s| (i, s)).collect())

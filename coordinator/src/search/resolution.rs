@@ -30,6 +30,11 @@ pub struct ResolutionSchedule {
     /// well but arrive at the fine one barely bred (docs/evolution.md, session 17).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub merge_islands: bool,
+    /// The merged island's population, when it should not be `search.population`: islands that
+    /// split one population (sixteen of 3) merge back into its whole (48), not into one island's
+    /// 3. Unset (the default): `search.population`. Needs `merge_islands`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merged_population: Option<usize>,
     /// At a coarse level, the run's best design is also evaluated at the finest level whenever it
     /// changes (one evaluation each), and the stall rule watches the best of those scores instead
     /// of the coarse fitness: a coarse level gives way once it stops finding designs that are
@@ -54,6 +59,7 @@ impl ResolutionSchedule {
             min_improvement: default_min_improvement(),
             latest_switch: Vec::new(),
             merge_islands: false,
+            merged_population: None,
             stall_on_finest: false,
         }
     }
@@ -78,6 +84,19 @@ impl ResolutionSchedule {
         }
         if !(self.min_improvement.is_finite() && self.min_improvement >= 0.0) {
             return Err("resolution.min_improvement must be a non-negative number".into());
+        }
+        match self.merged_population {
+            Some(n @ (0 | 1)) => {
+                return Err(format!(
+                    "resolution.merged_population = {n} must be at least 2 (crowding needs two to compare)"
+                ));
+            }
+            Some(n) if !self.merge_islands => {
+                return Err(format!(
+                    "resolution.merged_population = {n} needs resolution.merge_islands = true (without it the islands never merge)"
+                ));
+            }
+            _ => {}
         }
         let l = &self.latest_switch;
         if !l.is_empty() && l.len() + 1 != self.levels.len() {
@@ -201,6 +220,7 @@ mod tests {
             min_improvement: 0.1,
             latest_switch: vec![],
             merge_islands: false,
+            merged_population: None,
             stall_on_finest: false,
         };
         let mut s = ResolutionState::new();
@@ -225,6 +245,7 @@ mod tests {
             min_improvement: 0.01,
             latest_switch: vec![100, 250],
             merge_islands: false,
+            merged_population: None,
             stall_on_finest: false,
         };
         let mut s = ResolutionState::new();
@@ -248,6 +269,7 @@ mod tests {
             min_improvement: 0.01,
             latest_switch,
             merge_islands: false,
+            merged_population: None,
             stall_on_finest: false,
         };
         assert!(schedule(vec![]).validate().is_ok());
@@ -287,5 +309,26 @@ mod tests {
         islands[2].population[1].genome = islands[0].population[1].genome.clone();
         assert_eq!(order(&islands, 8), "01 10 02 11 22 00 20 21");
         assert_eq!(order(&islands, 3), "01 10 02");
+    }
+
+    #[test]
+    fn merged_population_needs_a_merge_and_two_individuals() {
+        let schedule = |merge_islands, merged_population| ResolutionSchedule {
+            merge_islands,
+            merged_population,
+            ..ResolutionSchedule::single(GridDims::new(1, 2, 1))
+        };
+        assert!(schedule(true, Some(48)).validate().is_ok());
+        assert!(schedule(false, None).validate().is_ok());
+        let err = schedule(false, Some(48)).validate().unwrap_err();
+        assert!(
+            err.starts_with("resolution.merged_population = 48 needs resolution.merge_islands"),
+            "{err}"
+        );
+        let err = schedule(true, Some(1)).validate().unwrap_err();
+        assert!(
+            err.starts_with("resolution.merged_population = 1 must be at least 2"),
+            "{err}"
+        );
     }
 }
