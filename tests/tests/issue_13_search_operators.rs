@@ -260,20 +260,23 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
         );
     }
     // The same batch before and after the merge: 3 islands x 4 children, then one island of 12.
-    let totals: Vec<i64> = {
-        let mut stmt = db
-            .prepare("SELECT evaluations FROM epoch ORDER BY epoch")
-            .unwrap();
-        stmt.query_map([], |r| r.get(0))
-            .unwrap()
-            .map(Result::unwrap)
-            .collect()
-    };
+    assert_one_switch(&db, switch, 12, 8);
+}
+
+/// Every epoch of the run evaluates `batch` children, and the one that switches resolution at
+/// epoch `switch` also its `reevaluations`.
+fn assert_one_switch(db: &rusqlite::Connection, switch: i64, batch: i64, reevaluations: i64) {
+    let mut stmt = db
+        .prepare("SELECT evaluations FROM epoch ORDER BY epoch")
+        .unwrap();
+    let totals: Vec<i64> = (stmt.query_map([], |r| r.get(0)).unwrap())
+        .map(Result::unwrap)
+        .collect();
     let steps: Vec<i64> = totals.windows(2).map(|w| w[1] - w[0]).collect();
     let s = switch as usize;
-    assert!(steps[..s - 1].iter().all(|&d| d == 12), "{steps:?}");
-    assert_eq!(steps[s - 1], 8 + 12, "{steps:?}");
-    assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
+    assert!(steps[..s - 1].iter().all(|&d| d == batch), "{steps:?}");
+    assert_eq!(steps[s - 1], reevaluations + batch, "{steps:?}");
+    assert!(steps[s..].iter().all(|&d| d == batch), "{steps:?}");
 }
 
 /// `resolution.merged_population`: islands that split one population (three of 4) merge back
@@ -330,19 +333,7 @@ merged_population = 12
     distinct.dedup();
     assert_eq!(carried.len(), 12);
     assert_eq!(distinct, held);
-    let steps: Vec<i64> = {
-        let mut stmt = db
-            .prepare("SELECT evaluations FROM epoch ORDER BY epoch")
-            .unwrap();
-        let totals: Vec<i64> = (stmt.query_map([], |r| r.get(0)).unwrap())
-            .map(Result::unwrap)
-            .collect();
-        totals.windows(2).map(|w| w[1] - w[0]).collect()
-    };
-    let s = switch as usize;
-    assert!(steps[..s - 1].iter().all(|&d| d == 12), "{steps:?}");
-    assert_eq!(steps[s - 1], 12 + 12, "{steps:?}");
-    assert!(steps[s..].iter().all(|&d| d == 12), "{steps:?}");
+    assert_one_switch(&db, switch, 12, 12);
 }
 
 fn finest_config(results_dir: &Path, evaluations: u64) -> RunConfig {
