@@ -69,7 +69,7 @@ impl LocalWorker {
         loop {
             if *stop.borrow() {
                 let held: Vec<TaskId> = active.iter().copied().collect();
-                summary.released += u64::from(self.queue.release(id, &held).unwrap_or(0));
+                summary.released += u64::from(self.queue.leave(id, &held).unwrap_or(0));
                 info!(worker = %id, released = summary.released, "local worker stopped");
                 return Ok(summary);
             }
@@ -125,7 +125,7 @@ impl LocalWorker {
                     if changed.is_err() {
                         // The job dropped its stop sender: nobody can stop us any more, so stop.
                         let held: Vec<TaskId> = active.iter().copied().collect();
-                        let _ = self.queue.release(id, &held);
+                        let _ = self.queue.leave(id, &held);
                         return Ok(summary);
                     }
                 }
@@ -302,6 +302,28 @@ mod tests {
             1,
             "back in the queue for another worker"
         );
+    }
+
+    #[test]
+    fn a_local_worker_stopped_at_the_finish_leaves_nobody_to_wait_for() {
+        // The job finishes the queue and stops its local workers together; a worker that sees
+        // the stop first never hears of the finish, and the end of the run waited a
+        // worker_timeout for the reaper to drop it (about 9 s after every local run, with a
+        // "went silent" warning per worker).
+        let rt = runtime();
+        let queue = Arc::new(TaskQueue::new(QueueRules::default()));
+        let (stop, stop_rx) = watch::channel(false);
+        let worker = LocalWorker::new(queue.clone(), beam(), "l".into(), 1, 1 << 40);
+        let handle = rt.spawn(worker.run(stop_rx));
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while queue.stats().workers == 0 {
+            assert!(Instant::now() < deadline, "the worker never registered");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        stop.send_replace(true);
+        queue.finish();
+        rt.block_on(handle).unwrap().unwrap();
+        assert!(queue.everyone_told(), "the stopped worker still counts");
     }
 
     #[test]

@@ -361,6 +361,16 @@ impl TaskQueue {
         Ok(held.len() as u32)
     }
 
+    /// A worker shuts down for good: it hands back `ids` (as [`TaskQueue::release`]) and is
+    /// forgotten at once, so neither the reaper (which would warn that it went silent) nor the
+    /// end of a finished run (which waits until every registered worker has heard of it) waits a
+    /// `worker_timeout` for it.
+    pub fn leave(&self, worker: WorkerId, ids: &[TaskId]) -> Result<u32, QueueError> {
+        let released = self.release(worker, ids)?;
+        self.lock().workers.remove(&worker);
+        Ok(released)
+    }
+
     /// Returns expired leases and the leases of silent workers to the queue; drops silent workers.
     /// Called periodically by the server.
     pub fn reap(&self, now: Instant) {
