@@ -360,8 +360,11 @@ fn tls_with_a_token_runs_and_plain_http_is_refused() {
     config.raw.cluster.tls_cert = Some(cert_path.clone());
     config.raw.cluster.tls_key = Some(key_path);
 
-    // One local worker (which trusts the certificate it is given) and one external TLS worker.
-    let run = ClusterRun::start(&config, 1, Some("s3cret"));
+    // No local worker: the external TLS worker must do every evaluation, so the run cannot end
+    // before it has connected. (With a local worker the run could finish first; the TLS worker,
+    // then refused at the closed port, failed after its 60 s of retries once local workers stopped
+    // holding the run open for the reaper at the finish.)
+    let run = ClusterRun::start(&config, 0, Some("s3cret"));
     let mut plain = amorph_worker::WorkerOptions::new(run.url(), 1);
     plain.token = Some("s3cret".into());
     plain.give_up_after = Some(Duration::from_secs(2));
