@@ -3,7 +3,11 @@
 //! checks the model against runs of the same config and seed made with other worker counts.
 //!
 //! `cargo bench -p amorph-coordinator --bench wall_model -- <run.sqlite> [--workers 1,2,16,256]
-//! [--fitness F] [--check <other run.sqlite>]...`
+//! [--fitness F] [--overlap on|off] [--check <other run.sqlite>]...`
+//!
+//! `--overlap` simulates the run with its finest-level checks sent out with the next epoch's
+//! children or alone (default: as the run did, which its stored config says); the coordinator's
+//! time is always taken from the run as it ran.
 //!
 //! `--fitness` adds the wall time to the first epoch whose best reaches F. A beam's fitness is
 //! minus the sum of its stations' squared errors, −N·(RMS/100)² for N stations: the paper's
@@ -11,7 +15,9 @@
 
 use std::path::PathBuf;
 
-use amorph_coordinator::run::schedule::{EpochTimes, first_reaching, overheads, simulated_wall};
+use amorph_coordinator::run::schedule::{
+    EpochTimes, RecordedRun, first_reaching, overheads, simulated_wall,
+};
 use amorph_coordinator::store::RunStore;
 
 fn main() {
@@ -23,6 +29,7 @@ fn main() {
     let mut workers = vec![1, 2, 4, 8, 16, 32, 64, 256];
     let mut fitness = None;
     let mut checks = Vec::new();
+    let mut overlap = None;
     let mut i = 0;
     while i < args.len() {
         let value = args.get(i + 1);
@@ -36,6 +43,17 @@ fn main() {
             }
             ("--fitness", Some(v)) => {
                 fitness = Some(v.parse::<f64>().expect("--fitness: a number"));
+                i += 1;
+            }
+            ("--overlap", Some(v)) => {
+                overlap = Some(match v.as_str() {
+                    "on" => true,
+                    "off" => false,
+                    _ => {
+                        eprintln!("wall_model: --overlap takes on or off, not {v}");
+                        std::process::exit(2);
+                    }
+                });
                 i += 1;
             }
             ("--check", Some(v)) => {
@@ -54,18 +72,21 @@ fn main() {
     }
     let Some(store) = store else {
         eprintln!(
-            "usage: wall_model <run.sqlite> [--workers 1,2,16] [--fitness F] [--check other.sqlite]..."
+            "usage: wall_model <run.sqlite> [--workers 1,2,16] [--fitness F] [--overlap on|off] [--check other.sqlite]..."
         );
         std::process::exit(2);
     };
-    let load = |path: &PathBuf| {
-        RunStore::peek_epoch_times(path).unwrap_or_else(|e| {
+    let load = |path: &PathBuf| -> RecordedRun {
+        RunStore::peek_recorded_run(path).unwrap_or_else(|e| {
             eprintln!("wall_model: {e}");
             std::process::exit(1)
         })
     };
-    let (epochs, measured) = load(&store);
-    let overhead = overheads(&epochs, measured);
+    let recorded = load(&store);
+    let measured = recorded.workers;
+    let overhead = overheads(&recorded.epochs(recorded.overlapped), measured);
+    let simulate_overlap = overlap.unwrap_or(recorded.overlapped);
+    let epochs = recorded.epochs(simulate_overlap);
     let measured_wall = epochs.last().map_or(0.0, |e| e.wall_seconds);
     let evaluations = epochs.last().map_or(0, |e| e.evaluations);
     let widest = epochs
@@ -74,10 +95,20 @@ fn main() {
         .max()
         .unwrap_or(0);
     println!(
-        "{}: {} epochs, {evaluations} evaluations, widest batch {widest}, {measured} worker(s), {measured_wall:.1} s measured, coordinator {:.1} s",
+        "{}: {} epochs, {evaluations} evaluations, widest batch {widest}, {measured} worker(s), {measured_wall:.1} s measured, coordinator {:.1} s, checks {} as run, simulated {}",
         store.display(),
         epochs.len(),
-        overhead.iter().sum::<f64>()
+        overhead.iter().sum::<f64>(),
+        if recorded.overlapped {
+            "overlapped"
+        } else {
+            "alone"
+        },
+        if simulate_overlap {
+            "overlapped"
+        } else {
+            "alone"
+        },
     );
     let target = fitness.and_then(|f| first_reaching(&epochs, f));
     if let Some(f) = fitness {
@@ -102,7 +133,9 @@ fn main() {
         );
     }
     for check in &checks {
-        let (other, other_workers) = load(check);
+        let other_run = load(check);
+        let other_workers = other_run.workers;
+        let other = other_run.epochs(other_run.overlapped);
         if !same_schedule(&epochs, &other) {
             eprintln!(
                 "wall_model: {} is not the same run (epochs or evaluation counts differ)",
@@ -110,7 +143,9 @@ fn main() {
             );
             std::process::exit(1);
         }
-        let predicted = simulated_wall(&epochs, &overhead, other_workers)
+        // Simulated the way the other run scheduled its checks.
+        let as_other = recorded.epochs(other_run.overlapped);
+        let predicted = simulated_wall(&as_other, &overhead, other_workers)
             .last()
             .copied()
             .unwrap_or(0.0);
@@ -123,14 +158,11 @@ fn main() {
     }
 }
 
-/// Same config and seed: the same epochs with the same batch sizes.
+/// Same config and seed: the same epochs with the same evaluation counts (the batches may
+/// differ where one run overlapped its checks and the other did not).
 fn same_schedule(a: &[EpochTimes], b: &[EpochTimes]) -> bool {
     a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            x.evaluations == y.evaluations
-                && x.batches
-                    .iter()
-                    .map(Vec::len)
-                    .eq(y.batches.iter().map(Vec::len))
-        })
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.epoch == y.epoch && x.evaluations == y.evaluations)
 }

@@ -32,7 +32,7 @@ use rusqlite::{Connection, OptionalExtension, params};
 
 use crate::config::RunConfig;
 use crate::ids::TaskId;
-use crate::run::schedule::EpochTimes;
+use crate::run::schedule::RecordedRun;
 
 const FORMAT: &str = "amorph-run-store-1";
 
@@ -70,6 +70,18 @@ pub enum Purpose {
 }
 
 impl Purpose {
+    const ALL: [Self; 4] = [
+        Self::Initial,
+        Self::Child,
+        Self::Reevaluation,
+        Self::FinestCheck,
+    ];
+
+    /// The purpose a store names `name`.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.as_str() == name)
+    }
+
     fn as_str(self) -> &'static str {
         match self {
             Self::Initial => "initial",
@@ -92,6 +104,8 @@ pub struct EvaluationRecord<'a> {
     pub outcome: &'a Outcome,
     pub worker: &'a str,
     pub wall_seconds: f64,
+    /// When the evaluation finished, s since the Unix epoch (a held one is stored later).
+    pub finished_unix: f64,
     /// An outside worker's claim, not yet checked.
     pub unchecked: bool,
 }
@@ -243,7 +257,7 @@ impl RunStore {
     pub fn record_evaluation(&self, r: &EvaluationRecord<'_>) -> Result<()> {
         let genome = serde_json::to_string(r.genome).expect("genomes serialize");
         let outcome = serde_json::to_string(r.outcome).expect("outcomes serialize");
-        let finished = unix_now();
+        let finished = r.finished_unix;
         self.with(|c| {
             let tx = c.transaction()?;
             tx.prepare_cached(
@@ -488,10 +502,11 @@ impl RunStore {
         Ok(islands)
     }
 
-    /// What the wall-time model needs from the store at `path` (read-only): every recorded epoch
-    /// with its batches' evaluation times, and how many distinct workers evaluated.
-    pub fn peek_epoch_times(path: &Path) -> Result<(Vec<EpochTimes>, usize)> {
-        let (epochs, evaluations, workers) = peek(path, |conn| {
+    /// What the wall-time model needs from the store at `path` (read-only): every recorded epoch,
+    /// every evaluation's epoch, purpose and time, how many distinct workers evaluated, and
+    /// whether the run overlapped its finest-level checks (stores from before that key did not).
+    pub fn peek_recorded_run(path: &Path) -> Result<RecordedRun> {
+        let (epochs, evaluations, workers, config) = peek(path, |conn| {
             let mut stmt = conn.prepare(
                 "SELECT epoch, evaluations, wall_seconds, best_fitness FROM epoch ORDER BY epoch",
             )?;
@@ -505,51 +520,65 @@ impl RunStore {
                     ))
                 })?
                 .collect::<rusqlite::Result<Vec<_>>>()?;
-            let mut stmt =
-                conn.prepare("SELECT epoch, wall_seconds FROM evaluation ORDER BY task_id")?;
+            let mut stmt = conn.prepare(
+                "SELECT task_id, epoch, purpose, wall_seconds FROM evaluation ORDER BY task_id",
+            )?;
             let evaluations = stmt
-                .query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, f64>(1)?)))?
+                .query_map([], |r| {
+                    Ok((
+                        r.get::<_, i64>(0)?,
+                        r.get::<_, i64>(1)?,
+                        r.get::<_, String>(2)?,
+                        r.get::<_, f64>(3)?,
+                    ))
+                })?
                 .collect::<rusqlite::Result<Vec<_>>>()?;
             let workers: i64 =
                 conn.query_row("SELECT COUNT(DISTINCT worker) FROM evaluation", [], |r| {
                     r.get(0)
                 })?;
-            Ok((epochs, evaluations, workers))
+            let config: Option<String> = conn
+                .query_row("SELECT value FROM run WHERE key = 'config'", [], |r| {
+                    r.get(0)
+                })
+                .optional()?;
+            Ok((epochs, evaluations, workers, config))
         })?;
         let corrupt = |message: String| StoreError::Corrupt {
             path: path.to_owned(),
             message,
         };
-        // Evaluations of epoch e ran as one batch; an epoch record holds every batch since the
-        // record before it (the first holds the initial population's).
-        let mut batches: std::collections::BTreeMap<i64, Vec<f64>> = Default::default();
-        for (epoch, wall) in evaluations {
-            if !(wall.is_finite() && wall >= 0.0) {
-                return Err(corrupt(format!(
-                    "table evaluation: wall_seconds {wall} in epoch {epoch}"
-                )));
-            }
-            batches.entry(epoch).or_default().push(wall);
-        }
-        let mut times = Vec::with_capacity(epochs.len());
+        let mut rows = Vec::with_capacity(epochs.len());
         for (epoch, evaluations, wall_seconds, best_fitness) in epochs {
-            let (Ok(index), Ok(count)) = (usize::try_from(epoch), u64::try_from(evaluations))
+            let (Ok(epoch), Ok(count)) = (usize::try_from(epoch), u64::try_from(evaluations))
             else {
                 return Err(corrupt(format!(
                     "table epoch, row epoch {epoch}: negative epoch or evaluation count"
                 )));
             };
-            let later = batches.split_off(&(epoch + 1));
-            let mine = std::mem::replace(&mut batches, later);
-            times.push(EpochTimes {
-                epoch: index,
-                batches: mine.into_values().collect(),
-                wall_seconds,
-                evaluations: count,
-                best_fitness,
-            });
+            rows.push((epoch, count, wall_seconds, best_fitness));
         }
-        Ok((times, usize::try_from(workers).unwrap_or(0)))
+        let mut timed = Vec::with_capacity(evaluations.len());
+        for (task, epoch, purpose, wall) in evaluations {
+            let at = |what: String| corrupt(format!("table evaluation, task {task}: {what}"));
+            let epoch = usize::try_from(epoch).map_err(|_| at(format!("epoch {epoch}")))?;
+            let purpose =
+                Purpose::parse(&purpose).ok_or_else(|| at(format!("purpose {purpose:?}")))?;
+            if !(wall.is_finite() && wall >= 0.0) {
+                return Err(at(format!("wall_seconds {wall}")));
+            }
+            timed.push((epoch, purpose, wall));
+        }
+        let overlapped = config
+            .and_then(|text| text.parse::<toml::Table>().ok())
+            .and_then(|t| t.get("resolution")?.get("overlap_finest_checks")?.as_bool())
+            .unwrap_or(false);
+        Ok(RecordedRun {
+            rows,
+            evaluations: timed,
+            workers: usize::try_from(workers).unwrap_or(0),
+            overlapped,
+        })
     }
 
     /// Evaluations in the store at `path`, read without disturbing a run that is writing it (the
@@ -664,7 +693,7 @@ fn peek<T>(path: &Path, query: impl FnOnce(&Connection) -> rusqlite::Result<T>) 
     query(&conn).map_err(sqlite)
 }
 
-fn unix_now() -> f64 {
+pub(crate) fn unix_now() -> f64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64())
@@ -781,6 +810,48 @@ mod tests {
             .unwrap();
         let err = store.evaluations().unwrap_err().to_string();
         assert!(err.contains("table evaluation, row task_id -7"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The wall model learns from the stored config whether a run overlapped its finest-level
+    /// checks: today's configs write the key at its default (on); a store from before the key,
+    /// whose run could not overlap, reads as not. A purpose the store does not know is an error
+    /// naming the task.
+    #[test]
+    fn a_recorded_run_says_whether_its_checks_overlapped() {
+        let dir = std::env::temp_dir().join(format!("amorph-store-overlap-{}", std::process::id()));
+        let config = locomotion_config(&dir, 1);
+        let text = config_text(&config);
+        assert!(text.contains("overlap_finest_checks = true"), "{text}");
+        let store = RunStore::create(&config, true).unwrap();
+        let path = store.path().to_owned();
+        assert!(RunStore::peek_recorded_run(&path).unwrap().overlapped);
+        let old_text: String = (text.lines())
+            .filter(|line| !line.starts_with("overlap_finest_checks"))
+            .map(|line| format!("{line}\n"))
+            .collect();
+        store
+            .with(|c| {
+                c.execute(
+                    "UPDATE run SET value = ?1 WHERE key = 'config'",
+                    [&old_text],
+                )
+            })
+            .unwrap();
+        assert!(!RunStore::peek_recorded_run(&path).unwrap().overlapped);
+        store
+            .with(|c| {
+                c.execute(
+                    "INSERT INTO evaluation(task_id, epoch, island, purpose, resolution, genome, outcome, fitness, worker, wall_seconds, finished_unix) VALUES (3, 1, 0, 'guess', '', '{}', '{}', 0.0, '', 0.5, 0)",
+                    [],
+                )
+            })
+            .unwrap();
+        let err = RunStore::peek_recorded_run(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("table evaluation, task 3: purpose \"guess\""),
+            "{err}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

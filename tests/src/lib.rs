@@ -64,6 +64,16 @@ target = "circular_arc"
     RunConfig::parse(&text, Path::new("small.toml")).expect("valid test config")
 }
 
+/// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process.
+pub fn circular_arc(name: &str, seed: u64, results_dir: &Path, sections: &str) -> RunConfig {
+    let text = format!(
+        "name = \"{name}\"\nseed = {seed}\nresults_dir = \"{dir}\"\n{sections}\n\
+         [cluster]\nlocal_workers = 0\n[scene]\nkind = \"beam\"\ntarget = \"circular_arc\"\n",
+        dir = results_dir.display()
+    );
+    RunConfig::parse(&text, Path::new(&format!("{name}.toml"))).expect("valid test config")
+}
+
 /// Runs a config in this process on `threads` evaluation threads: the reference every cluster
 /// run must match bit for bit.
 pub fn run_locally(config: &RunConfig, threads: usize) -> RunSummary {

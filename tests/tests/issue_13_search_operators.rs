@@ -5,18 +5,10 @@
 
 use amorph::genome::Genome;
 use amorph_coordinator::RunConfig;
-use amorph_tests::{fingerprint, resume_locally, run_locally, scratch_dir, thread_count_blind};
+use amorph_tests::{
+    circular_arc, fingerprint, resume_locally, run_locally, scratch_dir, thread_count_blind,
+};
 use std::path::Path;
-
-/// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process.
-fn circular_arc(name: &str, seed: u64, results_dir: &Path, sections: &str) -> RunConfig {
-    let text = format!(
-        "name = \"{name}\"\nseed = {seed}\nresults_dir = \"{dir}\"\n{sections}\n\
-         [cluster]\nlocal_workers = 0\n[scene]\nkind = \"beam\"\ntarget = \"circular_arc\"\n",
-        dir = results_dir.display()
-    );
-    RunConfig::parse(&text, Path::new(&format!("{name}.toml"))).expect("valid test config")
-}
 
 fn config(results_dir: &Path, seed: u64, local_search: &str) -> RunConfig {
     let sections = format!(
@@ -334,112 +326,4 @@ merged_population = 12
     assert_eq!(carried.len(), 12);
     assert_eq!(distinct, held);
     assert_one_switch(&db, switch, 12, 12);
-}
-
-fn finest_config(results_dir: &Path, evaluations: u64) -> RunConfig {
-    let sections = format!(
-        r#"
-[search]
-population = 8
-islands = 2
-children_per_epoch = 6
-initial_points = 40
-[search.local_search]
-fraction = 0.5
-step = 0.02
-shared = true
-[budget]
-evaluations = {evaluations}
-[resolution]
-levels = [[4, 12, 4], [6, 18, 6]]
-stall_epochs = 3
-min_improvement = 0.02
-stall_on_finest = true
-"#
-    );
-    circular_arc("finest", 5, results_dir, &sections)
-}
-
-/// `resolution.stall_on_finest`: at the coarse level the run's best is evaluated at the finest
-/// level each time it changes, and the switch comes when those scores stall, exactly where the
-/// stall rule applied to the stored checks puts it; the run is bit-identical on 1 and 3 threads
-/// and when interrupted at the coarse level and resumed.
-#[test]
-fn a_coarse_level_gives_way_when_its_best_stops_improving_on_the_finest_grid() {
-    let (one, config) = thread_count_blind("finest", |dir| finest_config(dir, 400));
-
-    let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
-    let query = |sql: &str| -> Vec<(i64, String, String, f64)> {
-        let mut stmt = db.prepare(sql).unwrap();
-        stmt.query_map([], |r| {
-            Ok((
-                r.get(0)?,
-                r.get(1)?,
-                r.get(2)?,
-                r.get::<_, Option<f64>>(3)?.unwrap_or(f64::NEG_INFINITY),
-            ))
-        })
-        .unwrap()
-        .map(Result::unwrap)
-        .collect()
-    };
-    let checks = query(
-        "SELECT epoch, resolution, genome, fitness FROM evaluation
-         WHERE purpose = 'finest_check' ORDER BY task_id",
-    );
-    let switch = query(
-        "SELECT epoch, resolution, genome, fitness FROM evaluation WHERE purpose = 'reevaluation'",
-    );
-    assert_eq!(switch.len(), 16, "both islands re-evaluated once");
-    let switch = switch[0].0;
-    // Checks happen at the coarse level only, at the finest resolution, one per epoch at most,
-    // never twice in a row on the same genome.
-    assert!(checks.len() >= 2, "{checks:?}");
-    assert!(
-        checks
-            .iter()
-            .all(|c| c.1 == "6x18x6" && (1..=switch).contains(&c.0))
-    );
-    assert!(
-        checks
-            .windows(2)
-            .all(|w| w[0].0 < w[1].0 && w[0].2 != w[1].2)
-    );
-    // The stall rule on the checks' running best gives the switch's epoch.
-    let (mut last_progress, mut without, mut expected) = (f64::NEG_INFINITY, 0, None);
-    let mut watched = f64::NEG_INFINITY;
-    for epoch in 1..=switch {
-        for c in checks.iter().filter(|c| c.0 == epoch) {
-            watched = watched.max(c.3);
-        }
-        let threshold = last_progress + 0.02 * last_progress.abs();
-        if watched > threshold || !last_progress.is_finite() {
-            (last_progress, without) = (watched, 0);
-        } else {
-            without += 1;
-        }
-        if without >= 3 {
-            expected = Some(epoch);
-            break;
-        }
-    }
-    assert_eq!(expected, Some(switch), "checks {checks:?}");
-
-    // Stopped at the end of the second check's epoch, before that check (the budget has no room
-    // left for it), then extended: the resumed session replays the first check and makes the
-    // second.
-    let stop_at: i64 = db
-        .query_row(
-            "SELECT evaluations FROM epoch WHERE epoch = ?1",
-            [checks[1].0],
-            |r| r.get(0),
-        )
-        .unwrap();
-    let stop_at = stop_at as u64;
-    let resumed_dir = scratch_dir("finest-resumed");
-    let first = run_locally(&finest_config(&resumed_dir, stop_at), 1);
-    assert_eq!(first.evaluations, stop_at);
-    let extended = finest_config(&resumed_dir, 400);
-    let resumed = resume_locally(&extended, 2);
-    assert_eq!(fingerprint(&resumed), fingerprint(&one));
 }

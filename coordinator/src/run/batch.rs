@@ -1,6 +1,7 @@
-//! One batch of evaluations: tasks numbered in the search's order, outcomes a resumed run's store
-//! already holds taken from there, every new outcome stored the moment it arrives, and outside
-//! workers' claims settled (`verification.rs`) before the search sees them.
+//! One evaluator call: tasks numbered in the search's order, outcomes a resumed run's store
+//! already holds taken from there, every new outcome stored the moment it arrives (or, for a
+//! part the search may still drop, held until it keeps it), and outside workers' claims settled
+//! (`verification.rs`) before the search sees them.
 
 use std::sync::Mutex;
 
@@ -12,8 +13,240 @@ use super::search::Search;
 use super::{Result, RunContext};
 use crate::evaluator::{Completion, Evaluator, Origin, Task};
 use crate::ids::TaskId;
-use crate::store::{EvaluationRecord, Purpose, StoreError};
+use crate::store::{EvaluationRecord, Purpose, StoreError, unix_now};
 use crate::verification::{self, Decisive, EARLIER_SESSION, Evaluated};
+
+/// One batch of genomes per island, numbered as tasks of the search: the unit a purpose, a
+/// resolution and an epoch of the run store belong to.
+pub(super) struct Part {
+    tasks: Vec<Task>,
+    /// Island of each task.
+    islands: Vec<u32>,
+    /// Tasks per island, to group the outcomes back.
+    sizes: Vec<usize>,
+    epoch: usize,
+    purpose: Purpose,
+    resolution: String,
+}
+
+impl Part {
+    /// Numbers `genomes` as the search's next tasks. Children belong to the epoch they are bred
+    /// for, everything else to the epoch just ended.
+    pub(super) fn number(
+        search: &mut Search,
+        genomes: &[Vec<Genome>],
+        dims: GridDims,
+        purpose: Purpose,
+    ) -> Self {
+        let epoch = match purpose {
+            Purpose::Child => search.epoch + 1,
+            Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => search.epoch,
+        };
+        let mut tasks = Vec::new();
+        let mut islands = Vec::new();
+        for (island, batch) in genomes.iter().enumerate() {
+            for genome in batch {
+                search.next_task += 1;
+                tasks.push(Task {
+                    id: TaskId(search.next_task),
+                    genome: genome.clone(),
+                    dims,
+                });
+                islands.push(island as u32);
+            }
+        }
+        Self {
+            tasks,
+            islands,
+            sizes: genomes.iter().map(Vec::len).collect(),
+            epoch,
+            purpose,
+            resolution: dims.to_string(),
+        }
+    }
+
+    fn record<'a>(
+        &'a self,
+        slot: usize,
+        done: &'a Completion,
+        finished_unix: f64,
+    ) -> EvaluationRecord<'a> {
+        EvaluationRecord {
+            task_id: self.tasks[slot].id,
+            epoch: self.epoch,
+            island: self.islands[slot],
+            purpose: self.purpose,
+            resolution: self.resolution.clone(),
+            genome: &self.tasks[slot].genome,
+            outcome: &done.outcome,
+            worker: &done.worker,
+            wall_seconds: done.wall_seconds,
+            finished_unix,
+            unchecked: matches!(done.origin, Origin::Claim(_)),
+        }
+    }
+
+    fn group(&self, evaluated: Vec<Evaluated>) -> Vec<Vec<Evaluated>> {
+        let mut evaluated = evaluated.into_iter();
+        self.sizes
+            .iter()
+            .map(|&n| evaluated.by_ref().take(n).collect())
+            .collect()
+    }
+}
+
+/// A part evaluated but not yet in the run store: its new outcomes (when they finished) and the
+/// errors workers reported on its tasks. [`Held::keep`] stores them and counts the part's
+/// evaluations; dropping it leaves no trace, so the run is as if the part had never been asked.
+pub(super) struct Held {
+    part: Part,
+    fresh: Vec<(usize, Completion, f64)>,
+    errors: Vec<(TaskId, String, String)>,
+    replayed: usize,
+}
+
+impl Held {
+    pub(super) fn keep(self, search: &mut Search, ctx: &RunContext<'_>) -> Result<()> {
+        for (slot, done, finished) in &self.fresh {
+            ctx.store
+                .record_evaluation(&self.part.record(*slot, done, *finished))?;
+        }
+        for (task, worker, message) in &self.errors {
+            ctx.store.record_task_error(*task, worker, message)?;
+        }
+        for _ in 0..self.fresh.len() + self.replayed {
+            ctx.progress.evaluated();
+        }
+        search.evaluations += self.part.tasks.len() as u64;
+        Ok(())
+    }
+}
+
+/// Each part's outcomes, grouped by island.
+type PartOutcomes = Vec<Vec<Vec<Evaluated>>>;
+
+/// Evaluates `parts` as one evaluator call, their fresh tasks in part order (so the first part's
+/// tasks are handed out first), and returns each part's outcomes grouped by island. The first
+/// `stored` parts are stored as their outcomes arrive and counted at once; the rest come back
+/// [`Held`], each with its outcomes (replayed ones included) for the search to keep or drop.
+/// Outside workers' outcomes are still claims: [`settle`] them before use.
+pub(super) fn evaluate_parts(
+    search: &mut Search,
+    evaluator: &mut dyn Evaluator,
+    parts: Vec<Part>,
+    stored: usize,
+    ctx: &RunContext<'_>,
+) -> Result<(PartOutcomes, Vec<Held>)> {
+    let mut evaluated: Vec<Vec<Option<Evaluated>>> =
+        parts.iter().map(|p| vec![None; p.tasks.len()]).collect();
+    let mut replayed = vec![0; parts.len()];
+    let mut fresh = Vec::new();
+    // (part, slot) of each fresh task.
+    let mut fresh_at = Vec::new();
+    for (p, part) in parts.iter().enumerate() {
+        for (slot, task) in part.tasks.iter().enumerate() {
+            let stored_outcome = search.replay.remove(&task.id).filter(|s| {
+                s.resolution == part.resolution
+                    && serde_json::to_string(&task.genome).is_ok_and(|g| g == s.genome_json)
+            });
+            match stored_outcome {
+                Some(s) => {
+                    evaluated[p][slot] = Some(Evaluated {
+                        task: task.id,
+                        outcome: s.outcome,
+                        claimant: s.unchecked.then_some(EARLIER_SESSION),
+                    });
+                    if p < stored {
+                        ctx.progress.evaluated();
+                    } else {
+                        replayed[p] += 1;
+                    }
+                }
+                None => {
+                    fresh.push(task.clone());
+                    fresh_at.push((p, slot));
+                }
+            }
+        }
+    }
+
+    let mut held_fresh: Vec<Vec<(usize, Completion, f64)>> = vec![Vec::new(); parts.len()];
+    let mut held_errors: Vec<Vec<(TaskId, String, String)>> = vec![Vec::new(); parts.len()];
+    if !fresh.is_empty() {
+        let store_error: Mutex<Option<StoreError>> = Mutex::new(None);
+        let holding: Mutex<Vec<(usize, Completion, f64)>> = Mutex::new(Vec::new());
+        let on_done = |_: &Task, done: &Completion| {
+            let (p, slot) = fresh_at[done.slot];
+            if p >= stored {
+                let mut held = holding.lock().unwrap_or_else(|e| e.into_inner());
+                held.push((done.slot, done.clone(), unix_now()));
+                return;
+            }
+            ctx.progress.evaluated();
+            if let Err(e) = ctx
+                .store
+                .record_evaluation(&parts[p].record(slot, done, unix_now()))
+            {
+                let mut first = store_error.lock().unwrap_or_else(|e| e.into_inner());
+                first.get_or_insert(e);
+            }
+        };
+        let results = evaluator.evaluate(&fresh, &on_done)?;
+        if let Some(e) = store_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
+            return Err(e.into());
+        }
+        // In the order they finished, each under its part.
+        for (at, done, finished) in holding.into_inner().unwrap_or_else(|e| e.into_inner()) {
+            let (p, slot) = fresh_at[at];
+            held_fresh[p].push((slot, done, finished));
+        }
+        for ((p, slot), done) in fresh_at.iter().zip(results) {
+            evaluated[*p][*slot] = Some(Evaluated {
+                task: parts[*p].tasks[*slot].id,
+                outcome: done.outcome,
+                claimant: match done.origin {
+                    Origin::Claim(w) => Some(w),
+                    Origin::Trusted | Origin::GaveUp => None,
+                },
+            });
+        }
+        for (task, worker, message) in evaluator.take_worker_errors() {
+            match parts[stored..]
+                .iter()
+                .position(|part| part.tasks.iter().any(|t| t.id == task))
+            {
+                Some(p) => held_errors[stored + p].push((task, worker, message)),
+                None => ctx.store.record_task_error(task, &worker, &message)?,
+            }
+        }
+    }
+
+    let mut outcomes = Vec::new();
+    let mut held = Vec::new();
+    for (p, ((part, evaluated), (fresh, errors))) in parts
+        .into_iter()
+        .zip(evaluated)
+        .zip(held_fresh.into_iter().zip(held_errors))
+        .enumerate()
+    {
+        let evaluated = evaluated
+            .into_iter()
+            .map(|e| e.expect("every task has an outcome"))
+            .collect();
+        outcomes.push(part.group(evaluated));
+        if p < stored {
+            search.evaluations += part.tasks.len() as u64;
+        } else {
+            held.push(Held {
+                part,
+                fresh,
+                errors,
+                replayed: replayed[p],
+            });
+        }
+    }
+    Ok((outcomes, held))
+}
 
 /// Evaluates one batch of genomes per island as a single evaluator call, returning the outcomes
 /// (with their task ids) grouped the same way. Tasks whose outcome a resumed run's store already
@@ -27,97 +260,9 @@ pub(super) fn evaluate_all(
     purpose: Purpose,
     ctx: &RunContext<'_>,
 ) -> Result<Vec<Vec<Evaluated>>> {
-    let epoch = match purpose {
-        Purpose::Child => search.epoch + 1,
-        Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => search.epoch,
-    };
-    let resolution = dims.to_string();
-    let mut tasks = Vec::new();
-    let mut islands = Vec::new();
-    for (island, batch) in genomes.iter().enumerate() {
-        for genome in batch {
-            search.next_task += 1;
-            tasks.push(Task {
-                id: TaskId(search.next_task),
-                genome: genome.clone(),
-                dims,
-            });
-            islands.push(island as u32);
-        }
-    }
-
-    let mut evaluated: Vec<Option<Evaluated>> = vec![None; tasks.len()];
-    let mut fresh = Vec::new();
-    let mut fresh_slots = Vec::new();
-    for (slot, task) in tasks.iter().enumerate() {
-        let stored = search.replay.remove(&task.id).filter(|s| {
-            s.resolution == resolution
-                && serde_json::to_string(&task.genome).is_ok_and(|g| g == s.genome_json)
-        });
-        match stored {
-            Some(s) => {
-                evaluated[slot] = Some(Evaluated {
-                    task: task.id,
-                    outcome: s.outcome,
-                    claimant: s.unchecked.then_some(EARLIER_SESSION),
-                });
-                ctx.progress.evaluated();
-            }
-            None => {
-                fresh.push(task.clone());
-                fresh_slots.push(slot);
-            }
-        }
-    }
-
-    if !fresh.is_empty() {
-        let store_error: Mutex<Option<StoreError>> = Mutex::new(None);
-        let on_done = |task: &Task, done: &Completion| {
-            ctx.progress.evaluated();
-            let record = EvaluationRecord {
-                task_id: task.id,
-                epoch,
-                island: islands[fresh_slots[done.slot]],
-                purpose,
-                resolution: resolution.clone(),
-                genome: &task.genome,
-                outcome: &done.outcome,
-                worker: &done.worker,
-                wall_seconds: done.wall_seconds,
-                unchecked: matches!(done.origin, Origin::Claim(_)),
-            };
-            if let Err(e) = ctx.store.record_evaluation(&record) {
-                let mut first = store_error.lock().unwrap_or_else(|e| e.into_inner());
-                first.get_or_insert(e);
-            }
-        };
-        let results = evaluator.evaluate(&fresh, &on_done)?;
-        if let Some(e) = store_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
-            return Err(e.into());
-        }
-        for (slot, done) in fresh_slots.iter().zip(results) {
-            evaluated[*slot] = Some(Evaluated {
-                task: tasks[*slot].id,
-                outcome: done.outcome,
-                claimant: match done.origin {
-                    Origin::Claim(w) => Some(w),
-                    Origin::Trusted | Origin::GaveUp => None,
-                },
-            });
-        }
-        for (task, worker, message) in evaluator.take_worker_errors() {
-            ctx.store.record_task_error(task, &worker, &message)?;
-        }
-    }
-    search.evaluations += tasks.len() as u64;
-
-    let mut evaluated = evaluated
-        .into_iter()
-        .map(|e| e.expect("every task has an outcome"));
-    Ok(genomes
-        .iter()
-        .map(|g| evaluated.by_ref().take(g.len()).collect())
-        .collect())
+    let part = Part::number(search, genomes, dims, purpose);
+    let (mut outcomes, _) = evaluate_parts(search, evaluator, vec![part], 1, ctx)?;
+    Ok(outcomes.pop().expect("one part"))
 }
 
 /// The outcomes of a batch once every outside worker's claim that `decisive` marks is checked

@@ -5,7 +5,9 @@
 //! check against a measured run with another number of workers shows.
 
 use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::collections::{BTreeMap, BinaryHeap};
+
+use crate::store::Purpose;
 
 /// One recorded epoch: its batches of evaluations (the wall time of each, in task order) and the
 /// run's wall clock and evaluation count when it ended.
@@ -17,6 +19,73 @@ pub struct EpochTimes {
     pub wall_seconds: f64,
     pub evaluations: u64,
     pub best_fitness: Option<f64>,
+}
+
+/// What a run store records of a run's timing: its epoch rows (epoch, evaluations, wall clock,
+/// best fitness), every evaluation in task order (the epoch it is filed under, why it ran, its
+/// wall time), how many distinct workers evaluated, and whether checks at the finest level went
+/// out with the next epoch's children (`resolution.overlap_finest_checks`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordedRun {
+    pub rows: Vec<(usize, u64, f64, Option<f64>)>,
+    pub evaluations: Vec<(usize, Purpose, f64)>,
+    pub workers: usize,
+    pub overlapped: bool,
+}
+
+impl RecordedRun {
+    /// The run's epochs with their batches as they run with checks `overlapped` or not. A batch
+    /// is a stretch of tasks of one epoch and purpose. Children run on their own epoch's clock;
+    /// anything asked for at the end of an epoch (a finest-level check, a switch's re-evaluation;
+    /// the initial population before epoch 1) runs on the next row's clock, the last row's if the
+    /// run ended first. Overlapped, a check and the next epoch's children that follow it are one
+    /// batch (the check handed out first); where the check ended the level its children were
+    /// dropped unrecorded, so that check runs alone here.
+    pub fn epochs(&self, overlapped: bool) -> Vec<EpochTimes> {
+        let mut batches: Vec<(usize, Purpose, Vec<f64>)> = Vec::new();
+        for &(epoch, purpose, seconds) in &self.evaluations {
+            match batches.last_mut() {
+                Some((e, p, b)) if *e == epoch && *p == purpose => b.push(seconds),
+                _ => batches.push((epoch, purpose, vec![seconds])),
+            }
+        }
+        let row_of: BTreeMap<usize, usize> = (self.rows.iter().enumerate())
+            .map(|(i, r)| (r.0, i))
+            .collect();
+        let mut times: Vec<EpochTimes> = (self.rows.iter())
+            .map(
+                |&(epoch, evaluations, wall_seconds, best_fitness)| EpochTimes {
+                    epoch,
+                    batches: Vec::new(),
+                    wall_seconds,
+                    evaluations,
+                    best_fitness,
+                },
+            )
+            .collect();
+        let Some(last) = times.len().checked_sub(1) else {
+            return times;
+        };
+        let mut batches = batches.into_iter().peekable();
+        while let Some((epoch, purpose, mut durations)) = batches.next() {
+            let runs_in = match purpose {
+                Purpose::Child => epoch,
+                Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => epoch + 1,
+            };
+            if overlapped
+                && purpose == Purpose::FinestCheck
+                && batches
+                    .peek()
+                    .is_some_and(|(e, p, _)| *p == Purpose::Child && *e == epoch + 1)
+            {
+                let (_, _, children) = batches.next().expect("peeked");
+                durations.extend(children);
+            }
+            let row = row_of.get(&runs_in).copied().unwrap_or(last);
+            times[row].batches.push(durations);
+        }
+        times
+    }
 }
 
 /// Time for `workers` to evaluate a batch whose evaluations take `durations` s, handed out in
@@ -167,5 +236,64 @@ mod tests {
         // Two workers: [1] 1, [3] 3, [1, 1] 1, so 5 s of work and no coordinator time left over.
         let two = simulated_wall(&epochs, &overhead, 2);
         assert!((two[1] - 5.0).abs() < 1e-9);
+    }
+
+    /// Batches land on the clock they ran on: the initial population and anything asked for at
+    /// the end of an epoch on the next row, children on their own. Overlapped, a check and the
+    /// next epoch's children are one batch; a check that ended the level (a re-evaluation
+    /// follows, its children dropped) runs alone.
+    #[test]
+    fn batches_run_on_the_row_after_the_epoch_that_asked_for_them() {
+        use Purpose::{Child, FinestCheck, Initial, Reevaluation};
+        let run = RecordedRun {
+            rows: vec![(1, 4, 10.0, None), (2, 7, 20.0, None), (3, 12, 30.0, None)],
+            evaluations: vec![
+                (0, Initial, 1.0),
+                (0, Initial, 1.0),
+                (1, Child, 2.0),
+                (1, Child, 2.0),
+                (1, FinestCheck, 5.0),
+                (2, Child, 1.0),
+                (2, Child, 1.0),
+                (2, FinestCheck, 5.0),
+                (2, Reevaluation, 3.0),
+                (2, Reevaluation, 3.0),
+                (3, Child, 1.0),
+                (3, Child, 1.0),
+            ],
+            workers: 2,
+            overlapped: true,
+        };
+        let batches = |overlapped| -> Vec<Vec<Vec<f64>>> {
+            (run.epochs(overlapped).into_iter())
+                .map(|e| e.batches)
+                .collect()
+        };
+        let last = vec![vec![5.0], vec![3.0, 3.0], vec![1.0, 1.0]];
+        assert_eq!(
+            batches(false),
+            [
+                vec![vec![1.0, 1.0], vec![2.0, 2.0]],
+                vec![vec![5.0], vec![1.0, 1.0]],
+                last.clone(),
+            ]
+        );
+        assert_eq!(
+            batches(true),
+            [
+                vec![vec![1.0, 1.0], vec![2.0, 2.0]],
+                vec![vec![5.0, 1.0, 1.0]],
+                last,
+            ]
+        );
+        // On two workers the check alone then its children take 5 + 1 s; beside them, 5 s.
+        let work = |overlapped| -> f64 {
+            run.epochs(overlapped)[1]
+                .batches
+                .iter()
+                .map(|b| makespan(b, 2))
+                .sum()
+        };
+        assert!((work(false) - 6.0).abs() < 1e-9 && (work(true) - 5.0).abs() < 1e-9);
     }
 }

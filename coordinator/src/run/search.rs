@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tracing::info;
 
-use super::batch::{evaluate_all, evaluate_settled, settle};
+use super::batch::{Held, Part, evaluate_all, evaluate_parts, evaluate_settled, settle};
 use super::{Result, RunContext, RunError};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
@@ -25,7 +25,7 @@ use crate::search::{
 };
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
-use crate::verification::Evaluated;
+use crate::verification::{self, Evaluated};
 
 pub(super) struct Search {
     pub(super) islands: Vec<Island>,
@@ -47,6 +47,23 @@ pub(super) struct Search {
     /// this coarse level, and the best rank such a check has given (what the stall rule watches).
     finest_checked: Option<Genome>,
     finest_best: f64,
+    /// The next epoch's children, sent out beside a finest-level check
+    /// (`resolution.overlap_finest_checks`) and waiting for the stall rule's verdict.
+    overlap: Option<Overlap>,
+}
+
+/// Children bred and evaluated ahead of their epoch, beside a check at the finest level that does
+/// not change them. The epoch takes them if it comes at this level; a switch drops them, and with
+/// them every trace of their breeding: the islands (random streams, step adaptation) and the task
+/// numbers go back to what they were, and their outcomes were never stored or counted.
+struct Overlap {
+    dims: GridDims,
+    children: Vec<Vec<Child>>,
+    genomes: Vec<Vec<Genome>>,
+    batch: Vec<Vec<Evaluated>>,
+    held: Held,
+    islands_before: Vec<Island>,
+    next_task_before: u64,
 }
 
 /// Wall time of the run across sessions: what earlier sessions used plus this session's time.
@@ -118,6 +135,7 @@ impl Search {
             children_per_island: raw.search.children_per_epoch,
             finest_checked: None,
             finest_best: f64::NEG_INFINITY,
+            overlap: None,
         };
         let dims = raw.resolution.dims(0);
         let outcomes = evaluate_settled(
@@ -151,7 +169,9 @@ impl Search {
 
     /// One epoch: every island breeds from its snapshot, all children are evaluated as one
     /// batch, and each island applies its own. The last epoch is shortened (spread over the
-    /// islands) so the run ends exactly on budget. Returns each island's replacements.
+    /// islands) so the run ends exactly on budget. Returns each island's replacements. Children
+    /// already evaluated beside a finest-level check are these very children: they are kept
+    /// (stored and counted now) instead of bred again.
     pub(super) fn epoch(
         &mut self,
         config: &RunConfig,
@@ -159,15 +179,61 @@ impl Search {
         evaluator: &mut dyn Evaluator,
         ctx: &RunContext<'_>,
     ) -> Result<Vec<usize>> {
+        let combine = (self.breeding.variation.local_search.combine)
+            .then_some(self.breeding.scene.limits().max_points);
+        let (children, genomes, batch) = match self.overlap.take() {
+            Some(overlap) if overlap.dims == dims => {
+                overlap.held.keep(self, ctx)?;
+                (overlap.children, overlap.genomes, overlap.batch)
+            }
+            other => {
+                if let Some(overlap) = other {
+                    self.drop_overlap(overlap);
+                }
+                let children = self.breed_children(config, dims, self.evaluations);
+                let genomes = genomes_of(&children);
+                let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Child, ctx)?;
+                (children, genomes, batch)
+            }
+        };
+        // A child's outcome decides when it would replace its dominant parent.
+        let winners = |batch: &[Vec<Evaluated>]| -> Vec<Vec<bool>> {
+            self.islands
+                .iter()
+                .zip(&children)
+                .zip(batch)
+                .map(|((island, children), group)| {
+                    let outcomes: Vec<&Outcome> = group.iter().map(|e| &e.outcome).collect();
+                    island.winners(children, &outcomes)
+                })
+                .collect()
+        };
+        let outcomes = settle(batch, &genomes, dims, evaluator, ctx, &winners)?;
+        self.epoch += 1;
+        Ok(self
+            .islands
+            .iter_mut()
+            .zip(children)
+            .zip(outcomes)
+            .map(|((island, children), outcomes)| island.apply(children, outcomes, combine))
+            .collect())
+    }
+
+    /// The children of the next epoch at `dims`, with `spent` evaluations of the budget spent
+    /// before them: the islands' share of what is left, the shared climb's nudges handed to the
+    /// island holding the run's best.
+    fn breed_children(
+        &mut self,
+        config: &RunConfig,
+        dims: GridDims,
+        spent: u64,
+    ) -> Vec<Vec<Child>> {
         let raw = &config.raw;
         let islands = self.islands.len();
         let left = raw
             .budget
             .evaluations
-            .map_or(u64::MAX, |max| max.saturating_sub(self.evaluations));
-        // Computed before the breeding borrow: the batch below needs `self` whole.
-        let combine = (self.breeding.variation.local_search.combine)
-            .then_some(self.breeding.scene.limits().max_points);
+            .map_or(u64::MAX, |max| max.saturating_sub(spent));
         let breeding = &self.breeding;
         // One climb for the whole run: every island nudges the run's best, and the island that
         // holds it (the lowest index on a tie) judges the nudges.
@@ -212,32 +278,13 @@ impl Search {
             }
             children[holder].extend(handed);
         }
-        let genomes: Vec<Vec<Genome>> = children
-            .iter()
-            .map(|c| c.iter().map(|c| c.genome.clone()).collect())
-            .collect();
-        let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Child, ctx)?;
-        // A child's outcome decides when it would replace its dominant parent.
-        let winners = |batch: &[Vec<Evaluated>]| -> Vec<Vec<bool>> {
-            self.islands
-                .iter()
-                .zip(&children)
-                .zip(batch)
-                .map(|((island, children), group)| {
-                    let outcomes: Vec<&Outcome> = group.iter().map(|e| &e.outcome).collect();
-                    island.winners(children, &outcomes)
-                })
-                .collect()
-        };
-        let outcomes = settle(batch, &genomes, dims, evaluator, ctx, &winners)?;
-        self.epoch += 1;
-        Ok(self
-            .islands
-            .iter_mut()
-            .zip(children)
-            .zip(outcomes)
-            .map(|((island, children), outcomes)| island.apply(children, outcomes, combine))
-            .collect())
+        children
+    }
+
+    /// Forgets children bred ahead of their epoch as if they had never been bred.
+    fn drop_overlap(&mut self, overlap: Overlap) {
+        self.islands = overlap.islands_before;
+        self.next_task = overlap.next_task_before;
     }
 
     /// Migration, when this epoch is one of its interval's.
@@ -294,6 +341,9 @@ impl Search {
         if !(switch_affordable && self.resolution.observe(watched, self.evaluations, schedule)) {
             return Ok(());
         }
+        if let Some(overlap) = self.overlap.take() {
+            self.drop_overlap(overlap);
+        }
         self.finest_checked = None;
         self.finest_best = f64::NEG_INFINITY;
         let carried: Vec<Vec<(usize, usize)>> = if merge {
@@ -343,7 +393,9 @@ impl Search {
 
     /// Evaluates the run's best at the finest level when it is not the genome checked last
     /// (and the budget has room for it), as the task of the island holding it; returns the best
-    /// rank the checks at this level have given.
+    /// rank the checks at this level have given. With `resolution.overlap_finest_checks` the
+    /// next epoch's children go out with the check, so the workers the single check leaves idle
+    /// evaluate them meanwhile; they wait in `overlap` for the stall rule's verdict.
     fn check_on_finest(
         &mut self,
         config: &RunConfig,
@@ -360,11 +412,47 @@ impl Search {
         }
         let mut genomes = vec![Vec::new(); island + 1];
         genomes[island].push(best.genome.clone());
-        let dims = config.raw.resolution.finest();
-        let outcomes =
-            evaluate_settled(self, evaluator, &genomes, dims, Purpose::FinestCheck, ctx)?;
+        let schedule = &config.raw.resolution;
+        let finest = schedule.finest();
+        let mut parts = vec![Part::number(self, &genomes, finest, Purpose::FinestCheck)];
+        let ahead = schedule.overlap_finest_checks.then(|| {
+            let dims = schedule.dims(self.resolution.level);
+            let islands_before = self.islands.clone();
+            let next_task_before = self.next_task;
+            // The check is part of the budget the children share.
+            let children = self.breed_children(config, dims, self.evaluations + 1);
+            let genomes = genomes_of(&children);
+            (dims, children, genomes, islands_before, next_task_before)
+        });
+        if let Some((dims, _, genomes, ..)) = &ahead {
+            parts.push(Part::number(self, genomes, *dims, Purpose::Child));
+        }
+        let (mut batches, held) = evaluate_parts(self, evaluator, parts, 1, ctx)?;
+        if let (Some((dims, children, genomes, islands_before, next_task_before)), Some(held)) =
+            (ahead, held.into_iter().next())
+        {
+            let batch = batches.pop().expect("the children's part");
+            self.overlap = Some(Overlap {
+                dims,
+                children,
+                genomes,
+                batch,
+                held,
+                islands_before,
+                next_task_before,
+            });
+        }
+        let checked = batches.pop().expect("the check's part");
+        let outcomes = settle(
+            checked,
+            &genomes,
+            finest,
+            evaluator,
+            ctx,
+            &verification::all_decide,
+        )?;
         let (_, outcome) = &outcomes[island][0];
-        info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %dims, "the run's best checked at the finest level");
+        info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %finest, "the run's best checked at the finest level");
         self.finest_best = self.finest_best.max(outcome.rank());
         self.finest_checked = genomes.swap_remove(island).pop();
         Ok(self.finest_best)
@@ -398,6 +486,13 @@ impl Search {
             })
             .collect()
     }
+}
+
+fn genomes_of(children: &[Vec<Child>]) -> Vec<Vec<Genome>> {
+    children
+        .iter()
+        .map(|c| c.iter().map(|c| c.genome.clone()).collect())
+        .collect()
 }
 
 /// Stores the end of an epoch. While replaying, first checks the replayed populations against the

@@ -61,7 +61,7 @@ pub struct Breeding {
     pub scene: Arc<Scene>,
 }
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Island {
     pub id: IslandId,
     pub population: Vec<Individual>,

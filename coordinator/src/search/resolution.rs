@@ -42,6 +42,14 @@ pub struct ResolutionSchedule {
     /// level's climbed best can score far worse on the fine grid (docs/evolution.md, session 19).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub stall_on_finest: bool,
+    /// With `stall_on_finest`: each check at the finest level is sent out together with the
+    /// next epoch's children, which do not depend on it; they are kept unless the check ends
+    /// the level (then they are dropped unstored, and the run is as if they were never bred).
+    /// The results are the same bits either way; only the wall time differs. Default true.
+    /// Written out even at its default, so a run store says whether its run overlapped (the
+    /// wall model reads it; stores from before the key read as not).
+    #[serde(default = "default_overlap_finest_checks")]
+    pub overlap_finest_checks: bool,
 }
 
 fn default_stall_epochs() -> usize {
@@ -49,6 +57,9 @@ fn default_stall_epochs() -> usize {
 }
 fn default_min_improvement() -> f64 {
     0.02
+}
+fn default_overlap_finest_checks() -> bool {
+    true
 }
 
 impl ResolutionSchedule {
@@ -61,6 +72,7 @@ impl ResolutionSchedule {
             merge_islands: false,
             merged_population: None,
             stall_on_finest: false,
+            overlap_finest_checks: true,
         }
     }
 
@@ -222,6 +234,7 @@ mod tests {
             merge_islands: false,
             merged_population: None,
             stall_on_finest: false,
+            overlap_finest_checks: true,
         };
         let mut s = ResolutionState::new();
         assert!(!s.observe(-10.0, 10, &schedule));
@@ -247,6 +260,7 @@ mod tests {
             merge_islands: false,
             merged_population: None,
             stall_on_finest: false,
+            overlap_finest_checks: true,
         };
         let mut s = ResolutionState::new();
         let mut best = -100.0;
@@ -271,6 +285,7 @@ mod tests {
             merge_islands: false,
             merged_population: None,
             stall_on_finest: false,
+            overlap_finest_checks: true,
         };
         assert!(schedule(vec![]).validate().is_ok());
         assert!(schedule(vec![100, 200]).validate().is_ok());
