@@ -11,7 +11,8 @@ use amorph_coordinator::progress::Progress;
 use amorph_coordinator::store::RunStore;
 use amorph_coordinator::{Evaluator, LocalEvaluator, RunConfig, RunContext, RunSummary, Task, run};
 use amorph_tests::{
-    circular_arc, fingerprint, resume_locally, run_locally, scratch_dir, thread_count_blind,
+    ClusterRun, TestWorker, circular_arc, fingerprint, resume_locally, run_locally, scratch_dir,
+    thread_count_blind,
 };
 
 /// Two islands on the circular arc, 4×12×4 then 6×18×6 with the stall rule watching the finest
@@ -218,4 +219,23 @@ fn checks_sent_out_with_the_next_children_change_no_bit() {
         "{:?}",
         recording.batches
     );
+}
+
+/// The same through the cluster: two gRPC workers, whose outcomes are claims (each check and
+/// each child that would replace a parent is evaluated again by the other before it counts),
+/// take the check and the coarse children from one batch, and the run is the in-process run
+/// without overlap, bit for bit, run store included.
+#[test]
+fn two_grpc_workers_give_the_overlapped_run_bit_for_bit() {
+    let plain = finest_config(&scratch_dir("grpc-plain"), 400, false);
+    let plain_run = run_locally(&plain, 1);
+    let config = finest_config(&scratch_dir("grpc-overlapped"), 400, true);
+    let run = ClusterRun::start(&config, 0, None);
+    let a = TestWorker::start(&run.url(), 1, None);
+    let b = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), fingerprint(&plain_run));
+    assert_eq!(stored(&config), stored(&plain));
+    let (a, b) = (a.join().unwrap(), b.join().unwrap());
+    assert!(a.evaluated > 0 && b.evaluated > 0, "{a:?} {b:?}");
 }

@@ -22,6 +22,15 @@ pub struct ClusterEvaluator {
     /// worker may take, and the tie-break when a check disagrees with a claim.
     scene: Arc<Scene>,
     next_check: u64,
+    /// Added to the search's task ids on the queue. The queue needs ids that increase from batch
+    /// to batch (a late result for an earlier batch must never pass for one of the current
+    /// batch), while the search hands out ids again when it drops children it sent out ahead
+    /// of their epoch (`resolution.overlap_finest_checks`); from then on the queue's ids run
+    /// this far ahead of the search's. Zero in a run that never dropped any.
+    queue_offset: u64,
+    /// The first and last queue ids of the batch last submitted ((0, 0) before the first: the
+    /// search's ids start at 1).
+    queued: (u64, u64),
     stats: CheckStats,
     /// `cluster.verify = "all"`: check every outside claim, deciding or not.
     check_all: bool,
@@ -46,6 +55,8 @@ impl ClusterEvaluator {
             shutdown,
             scene,
             next_check: TaskId::FIRST_CHECK,
+            queue_offset: 0,
+            queued: (0, 0),
             stats: CheckStats::default(),
             check_all: false,
         }
@@ -161,7 +172,23 @@ impl Evaluator for ClusterEvaluator {
         tasks: &[Task],
         on_done: &(dyn Fn(&Task, &Completion) + Sync),
     ) -> Result<Vec<Completion>, EvaluatorError> {
-        let done = self.queue.submit(tasks.to_vec());
+        let (Some(first), Some(last)) = (tasks.first(), tasks.last()) else {
+            return Ok(Vec::new());
+        };
+        if first.id.0 + self.queue_offset <= self.queued.1 {
+            self.queue_offset = self.queued.1 + 1 - first.id.0;
+        }
+        self.queued = (
+            first.id.0 + self.queue_offset,
+            last.id.0 + self.queue_offset,
+        );
+        let queued: Vec<Task> = (tasks.iter())
+            .map(|t| Task {
+                id: TaskId(t.id.0 + self.queue_offset),
+                ..t.clone()
+            })
+            .collect();
+        let done = self.queue.submit(queued);
         self.collect(tasks, &done, on_done)
     }
 
@@ -224,7 +251,14 @@ impl Evaluator for ClusterEvaluator {
         self.queue
             .take_noted_errors()
             .into_iter()
-            .map(|(t, w, m)| (t, w.to_string(), m))
+            .map(|(t, w, m)| {
+                let task = if (self.queued.0..=self.queued.1).contains(&t.0) {
+                    TaskId(t.0 - self.queue_offset)
+                } else {
+                    t
+                };
+                (task, w.to_string(), m)
+            })
             .collect()
     }
 }
