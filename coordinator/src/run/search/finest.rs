@@ -1,0 +1,106 @@
+//! The coarse level judged on the finest grid (`resolution.stall_on_finest`): the check of the
+//! run's best at the finest level, and the next epoch's children sent out beside it
+//! (`resolution.overlap_finest_checks`), kept if the level goes on and dropped without a trace if
+//! the check ends it.
+
+use amorph::genome::Genome;
+use amorph::voxel::GridDims;
+use tracing::info;
+
+use super::super::batch::{Held, Part, evaluate_parts, settle};
+use super::super::{Result, RunContext};
+use super::{Search, genomes_of};
+use crate::config::RunConfig;
+use crate::evaluator::Evaluator;
+use crate::search::{Child, Island};
+use crate::store::Purpose;
+use crate::verification::{self, Evaluated};
+
+/// Children bred and evaluated ahead of their epoch, beside a check at the finest level that does
+/// not change them. The epoch takes them if it comes at this level; a switch drops them, and with
+/// them every trace of their breeding: the islands (random streams, step adaptation) and the task
+/// numbers go back to what they were, and their outcomes were never stored or counted.
+pub(super) struct Overlap {
+    pub(super) dims: GridDims,
+    pub(super) children: Vec<Vec<Child>>,
+    pub(super) genomes: Vec<Vec<Genome>>,
+    pub(super) batch: Vec<Vec<Evaluated>>,
+    pub(super) held: Held,
+    islands_before: Vec<Island>,
+    next_task_before: u64,
+}
+
+impl Search {
+    /// Evaluates the run's best at the finest level when it is not the genome checked last
+    /// (and the budget has room for it), as the task of the island holding it; returns the best
+    /// rank the checks at this level have given. With `resolution.overlap_finest_checks` the
+    /// next epoch's children go out with the check, so the workers the single check leaves idle
+    /// evaluate them meanwhile; they wait in `overlap` for the stall rule's verdict.
+    pub(super) fn check_on_finest(
+        &mut self,
+        config: &RunConfig,
+        evaluator: &mut dyn Evaluator,
+        ctx: &RunContext<'_>,
+    ) -> Result<f64> {
+        let best = self.best();
+        let island = (self.islands.iter())
+            .position(|i| std::ptr::eq(i.best(), best))
+            .expect("the run's best is an island's best");
+        let affordable = (config.raw.budget.evaluations).is_none_or(|max| self.evaluations < max);
+        if !affordable || self.finest_checked.as_ref() == Some(&best.genome) {
+            return Ok(self.finest_best);
+        }
+        let mut genomes = vec![Vec::new(); island + 1];
+        genomes[island].push(best.genome.clone());
+        let schedule = &config.raw.resolution;
+        let finest = schedule.finest();
+        let mut parts = vec![Part::number(self, &genomes, finest, Purpose::FinestCheck)];
+        let ahead = schedule.overlap_finest_checks.then(|| {
+            let dims = schedule.dims(self.resolution.level);
+            let islands_before = self.islands.clone();
+            let next_task_before = self.next_task;
+            // The check is part of the budget the children share.
+            let children = self.breed_children(config, dims, self.evaluations + 1);
+            let genomes = genomes_of(&children);
+            (dims, children, genomes, islands_before, next_task_before)
+        });
+        if let Some((dims, _, genomes, ..)) = &ahead {
+            parts.push(Part::number(self, genomes, *dims, Purpose::Child));
+        }
+        let (mut batches, held) = evaluate_parts(self, evaluator, parts, 1, ctx)?;
+        if let (Some((dims, children, genomes, islands_before, next_task_before)), Some(held)) =
+            (ahead, held.into_iter().next())
+        {
+            let batch = batches.pop().expect("the children's part");
+            self.overlap = Some(Overlap {
+                dims,
+                children,
+                genomes,
+                batch,
+                held,
+                islands_before,
+                next_task_before,
+            });
+        }
+        let checked = batches.pop().expect("the check's part");
+        let outcomes = settle(
+            checked,
+            &genomes,
+            finest,
+            evaluator,
+            ctx,
+            &verification::all_decide,
+        )?;
+        let (_, outcome) = &outcomes[island][0];
+        info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %finest, "the run's best checked at the finest level");
+        self.finest_best = self.finest_best.max(outcome.rank());
+        self.finest_checked = genomes.swap_remove(island).pop();
+        Ok(self.finest_best)
+    }
+
+    /// Forgets children bred ahead of their epoch as if they had never been bred.
+    pub(super) fn drop_overlap(&mut self, overlap: Overlap) {
+        self.islands = overlap.islands_before;
+        self.next_task = overlap.next_task_before;
+    }
+}
