@@ -135,16 +135,16 @@ fn main() {
     for check in &checks {
         let other_run = load(check);
         let other_workers = other_run.workers;
+        // Both runs batched the way the other one scheduled its checks.
         let other = other_run.epochs(other_run.overlapped);
-        if !same_schedule(&epochs, &other) {
+        let as_other = recorded.epochs(other_run.overlapped);
+        if !same_schedule(&as_other, &other) {
             eprintln!(
-                "wall_model: {} is not the same run (epochs or evaluation counts differ)",
+                "wall_model: {} is not the same run (epochs, evaluation counts or batch sizes differ)",
                 check.display()
             );
             std::process::exit(1);
         }
-        // Simulated the way the other run scheduled its checks.
-        let as_other = recorded.epochs(other_run.overlapped);
         let predicted = simulated_wall(&as_other, &overhead, other_workers)
             .last()
             .copied()
@@ -158,11 +158,15 @@ fn main() {
     }
 }
 
-/// Same config and seed: the same epochs with the same evaluation counts (the batches may
-/// differ where one run overlapped its checks and the other did not).
+/// Same config and seed: the same epochs with the same batch sizes.
 fn same_schedule(a: &[EpochTimes], b: &[EpochTimes]) -> bool {
     a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(x, y)| x.epoch == y.epoch && x.evaluations == y.evaluations)
+        && a.iter().zip(b).all(|(x, y)| {
+            x.epoch == y.epoch
+                && x.evaluations == y.evaluations
+                && x.batches
+                    .iter()
+                    .map(Vec::len)
+                    .eq(y.batches.iter().map(Vec::len))
+        })
 }
