@@ -140,18 +140,25 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     let scene = Arc::new(config.raw.scene.clone());
     // The local workers share this machine: each gets its part of the default budget.
     let budget = memory::default_budget() / local.max(1) as u64;
-    let workers: Vec<_> = (0..local)
-        .map(|i| {
-            let worker = LocalWorker::new(
-                queue.clone(),
-                scene.clone(),
-                format!("local-{i}"),
-                settings.local_worker_threads,
-                budget,
-            );
-            runtime.spawn(worker.run(stop_rx.clone()))
-        })
-        .collect();
+    let mut workers = Vec::with_capacity(local);
+    for i in 0..local {
+        let mut worker = LocalWorker::new(
+            queue.clone(),
+            scene.clone(),
+            format!("local-{i}"),
+            settings.local_worker_threads,
+            budget,
+        );
+        if settings.threads_per_evaluation > 1 {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(settings.threads_per_evaluation)
+                .thread_name(move |j| format!("local-{i}.{j}"))
+                .build()
+                .map_err(|e| JobError::Runtime(std::io::Error::other(e)))?;
+            worker = worker.sharing_evaluations(Arc::new(pool));
+        }
+        workers.push(runtime.spawn(worker.run(stop_rx.clone())));
+    }
     info!(%url, local_workers = local, store = %store.path().display(), "coordinator ready");
 
     let mut evaluator = ClusterEvaluator::new(queue.clone(), options.shutdown.clone(), scene)

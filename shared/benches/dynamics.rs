@@ -196,9 +196,39 @@ fn paper_robot(seed: u64) -> VoxelGrid {
     keep_largest_component(&grid)
 }
 
+/// The `threads` mode: the N = 10 and N = 20 blocks' step on the calling thread alone, then inside
+/// pools of each of `counts` threads (the same bits: `dynamics::parallel`).
+fn threads_table(counts: &[usize]) {
+    for n in [10, 20] {
+        let steps = if n == 10 { 50 } else { 10 };
+        let alone = min_step_time(&mut speed_block(n), steps);
+        println!("block_{n} alone            {alone:9.1} µs");
+        for &threads in counts {
+            let t = in_pool(Some(threads), || min_step_time(&mut speed_block(n), steps));
+            println!(
+                "block_{n} {threads:>2} threads       {t:9.1} µs  {:.2}x alone",
+                alone / t
+            );
+        }
+    }
+}
+
+/// `f` on the calling thread, or inside a pool of `threads` threads.
+fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
+    match threads {
+        None => f(),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("a thread pool")
+            .install(f),
+    }
+}
+
 /// The `eval` mode: paper-style evaluations of two random robots from 20 seeds, the one closest
-/// in size to the paper's 3,544-voxel robot (the reference engine's 178 s) and the largest.
-fn paper_evaluation() {
+/// in size to the paper's 3,544-voxel robot (the reference engine's 178 s) and the largest; with
+/// `--threads N` each runs inside a pool of N threads; `only` picks one of the two by name.
+fn paper_evaluation(threads: Option<usize>, only: Option<&str>) {
     let robots: Vec<VoxelGrid> = (0..20).map(paper_robot).collect();
     let paper_sized = robots
         .iter()
@@ -206,15 +236,21 @@ fn paper_evaluation() {
         .unwrap();
     let largest = robots.iter().max_by_key(|g| g.filled_count()).unwrap();
     for (name, grid) in [("paper-sized", paper_sized), ("largest", largest)] {
+        if only.is_some_and(|o| o != name) {
+            continue;
+        }
         let scene = DynamicScene::paper_locomotion();
         let start = Instant::now();
         let protocol = LocomotionProtocol::default();
-        let outcome = simulate_locomotion(grid, &foam_palette(), &scene, &protocol);
+        let outcome = in_pool(threads, || {
+            simulate_locomotion(grid, &foam_palette(), &scene, &protocol)
+        });
         let wall = start.elapsed().as_secs_f64();
         println!(
-            "paper-style evaluation, {name} robot: {} voxels, {} steps ({:.3} s simulated, settled \
+            "paper-style evaluation ({} threads), {name} robot: {} voxels, {} steps ({:.3} s simulated, settled \
              after {:.3} s, dt {:.3e} s), {:.1} s wall, {:.3e} voxel-steps/s, status {:?}, \
-             gait {:.3} %/cycle",
+             gait {:.3} %/cycle (bits {:016x})",
+            threads.map_or("alone".to_string(), |n| n.to_string()),
             outcome.voxel_count,
             outcome.steps,
             outcome.simulated_time,
@@ -223,7 +259,8 @@ fn paper_evaluation() {
             wall,
             outcome.voxel_count as f64 * outcome.steps as f64 / wall,
             outcome.status,
-            outcome.speed_percent_per_cycle
+            outcome.speed_percent_per_cycle,
+            outcome.fitness.to_bits()
         );
     }
 }
@@ -238,8 +275,22 @@ fn main() {
         min_table();
         return;
     }
+    let numbers =
+        |from: usize| -> Vec<usize> { args[from..].iter().map_while(|a| a.parse().ok()).collect() };
+    if let Some(i) = args.iter().position(|a| a == "threads") {
+        let counts = numbers(i + 1);
+        threads_table(if counts.is_empty() { &[1, 2] } else { &counts });
+        return;
+    }
     if args.iter().any(|a| a == "eval") {
-        paper_evaluation();
+        let threads = args
+            .iter()
+            .position(|a| a == "--threads")
+            .and_then(|i| numbers(i + 1).first().copied());
+        let only = ["paper-sized", "largest"]
+            .into_iter()
+            .find(|name| args.iter().any(|a| a == name));
+        paper_evaluation(threads, only);
         return;
     }
     let mut c = Criterion::default().configure_from_args();

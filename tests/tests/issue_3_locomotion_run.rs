@@ -7,7 +7,7 @@ use amorph::dynamics::FrictionLaw;
 use amorph::task::locomotion::LocomotionScene;
 use amorph::task::{Metrics, Scene};
 use amorph_coordinator::RunConfig;
-use amorph_tests::{run_locally, scratch_dir};
+use amorph_tests::{ClusterRun, run_locally, scratch_dir};
 
 mod report_check;
 
@@ -41,6 +41,23 @@ period = 0.02
         dir = results_dir.display()
     );
     RunConfig::parse(&text, Path::new("tiny.toml")).expect("valid test config")
+}
+
+/// `cluster.threads_per_evaluation`: the coordinator's local workers run each evaluation inside a
+/// pool of that many threads, and the run is the one the calling-thread evaluators give (the
+/// simulation's own bit-identity across thread counts is `shared/tests/dynamics_threads.rs`).
+#[test]
+fn local_workers_sharing_each_evaluation_among_threads_give_the_same_run() {
+    let alone = {
+        let dir = scratch_dir("walker-alone");
+        run_locally(&tiny_locomotion_config(&dir, 9), 1)
+    };
+    let dir = scratch_dir("walker-shared");
+    let mut config = tiny_locomotion_config(&dir, 9);
+    config.raw.cluster.threads_per_evaluation = 3;
+    let shared = ClusterRun::start(&config, 2, None).join();
+    assert_eq!(shared.evaluations, 20);
+    assert_eq!(shared.populations, alone.populations);
 }
 
 #[test]

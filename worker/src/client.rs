@@ -37,6 +37,10 @@ pub struct WorkerOptions {
     pub url: String,
     /// Evaluations at once (its capacity).
     pub threads: usize,
+    /// Threads that share one evaluation (1: each evaluation on its own thread). The outcome is
+    /// the same bits for any count (`amorph::dynamics`); more pays where evaluations are fewer
+    /// than cores, e.g. large robots or a batch smaller than the cluster.
+    pub threads_per_evaluation: usize,
     /// Shown in the coordinator's logs and run store.
     pub name: String,
     /// The shared secret, if the coordinator requires one.
@@ -67,6 +71,7 @@ impl WorkerOptions {
         Self {
             url: url.into(),
             threads: threads.max(1),
+            threads_per_evaluation: 1,
             name: default_name(),
             token: None,
             ca_cert: None,
@@ -206,8 +211,17 @@ pub async fn run_worker(
         )));
     }
     let (done_tx, done) = mpsc::unbounded_channel();
-    let pool = Pool::new(opts.threads, opts.mode, done_tx).map_err(|e| {
-        ClientError::Setup(format!("starting {} evaluation threads: {e}", opts.threads))
+    let pool = Pool::new(
+        opts.threads,
+        opts.threads_per_evaluation,
+        opts.mode,
+        done_tx,
+    )
+    .map_err(|e| {
+        ClientError::Setup(format!(
+            "starting {} evaluation threads of {} each: {e}",
+            opts.threads, opts.threads_per_evaluation
+        ))
     })?;
     let mut worker = Worker {
         evaluation_budget: opts

@@ -1,5 +1,6 @@
 //! The CPU pool: evaluations run on plain threads of their own, never on the async runtime, so a
-//! long simulation cannot stall heartbeats or the network. One evaluation per thread at a time.
+//! long simulation cannot stall heartbeats or the network. One evaluation per thread at a time,
+//! each on that thread alone or shared with a `rayon` pool of its own (same bits either way).
 
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex};
@@ -49,9 +50,11 @@ pub struct Pool {
 }
 
 impl Pool {
-    /// Starts `threads` threads; fails (instead of panicking) when the system will not give them.
+    /// Starts `threads` threads, each evaluating on `per_evaluation` threads (itself included
+    /// when 1); fails (instead of panicking) when the system will not give them.
     pub fn new(
         threads: usize,
+        per_evaluation: usize,
         mode: EvaluationMode,
         done: UnboundedSender<JobDone>,
     ) -> std::io::Result<Self> {
@@ -60,9 +63,18 @@ impl Pool {
         for i in 0..threads {
             let queue = queue.clone();
             let done = done.clone();
+            let shared = (per_evaluation > 1)
+                .then(|| {
+                    rayon::ThreadPoolBuilder::new()
+                        .num_threads(per_evaluation)
+                        .thread_name(move |j| format!("evaluate-{i}.{j}"))
+                        .build()
+                        .map_err(std::io::Error::other)
+                })
+                .transpose()?;
             std::thread::Builder::new()
                 .name(format!("evaluate-{i}"))
-                .spawn(move || work(&queue, mode, &done))?;
+                .spawn(move || work(&queue, shared.as_ref(), mode, &done))?;
         }
         Ok(Self { jobs, threads })
     }
@@ -77,7 +89,12 @@ impl Pool {
     }
 }
 
-fn work(queue: &Mutex<Receiver<Job>>, mode: EvaluationMode, done: &UnboundedSender<JobDone>) {
+fn work(
+    queue: &Mutex<Receiver<Job>>,
+    shared: Option<&rayon::ThreadPool>,
+    mode: EvaluationMode,
+    done: &UnboundedSender<JobDone>,
+) {
     loop {
         let job = {
             let queue = queue.lock().unwrap_or_else(|e| e.into_inner());
@@ -88,7 +105,13 @@ fn work(queue: &Mutex<Receiver<Job>>, mode: EvaluationMode, done: &UnboundedSend
         };
         let started = Instant::now();
         let outcome = match mode {
-            EvaluationMode::Physics => job.scene.evaluate(&job.genome, job.dims),
+            EvaluationMode::Physics => {
+                let evaluate = || job.scene.evaluate(&job.genome, job.dims);
+                match shared {
+                    Some(pool) => pool.install(evaluate),
+                    None => evaluate(),
+                }
+            }
             EvaluationMode::Instant => Outcome::failed(Failure::Empty),
         };
         let finished = JobDone {
@@ -99,5 +122,54 @@ fn work(queue: &Mutex<Receiver<Job>>, mode: EvaluationMode, done: &UnboundedSend
         if done.send(finished).is_err() {
             return;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use amorph::genome::GaussianPoint;
+    use amorph::material::MaterialId;
+    use amorph::task::locomotion::LocomotionScene;
+
+    /// A two-foam robot in a 10³ workspace (about 350 voxels, several parts per thread), walked
+    /// for two short cycles.
+    fn job(task: u64) -> Job {
+        let blob = |x: f64, material: u8| GaussianPoint {
+            position: [x, 0.5, 0.3],
+            density: 1.0,
+            falloff: 0.3,
+            material: MaterialId(material),
+        };
+        let mut scene = LocomotionScene {
+            workspace: 0.02,
+            ..LocomotionScene::default()
+        };
+        scene.actuation_cycles = 2;
+        scene.settle.max_time = 0.01;
+        if let Some(a) = scene.dynamics.actuation.as_mut() {
+            a.period = 0.02;
+        }
+        Job {
+            task_id: TaskId(task),
+            genome: Genome::new(vec![blob(0.3, 0), blob(0.7, 1)]),
+            scene: Arc::new(Scene::Locomotion(scene)),
+            dims: GridDims::new(10, 10, 10),
+        }
+    }
+
+    fn evaluate_on(per_evaluation: usize) -> String {
+        let (done, mut finished) = tokio::sync::mpsc::unbounded_channel();
+        let pool = Pool::new(1, per_evaluation, EvaluationMode::Physics, done).unwrap();
+        pool.submit(job(7));
+        let outcome = finished.blocking_recv().unwrap().outcome;
+        serde_json::to_string(&outcome).unwrap()
+    }
+
+    #[test]
+    fn an_evaluation_shared_by_threads_is_the_same_bits() {
+        let alone = evaluate_on(1);
+        assert!(alone.starts_with("{\"evaluated\""), "{alone}");
+        assert_eq!(evaluate_on(3), alone);
     }
 }

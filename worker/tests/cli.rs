@@ -93,3 +93,43 @@ fn an_out_of_range_genome_is_refused_naming_the_point_and_field() {
     );
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
 }
+
+/// `worker evaluate --threads N`: a robot's outcome is the same JSON on 1 and 3 threads, and a
+/// thread count out of range is refused in one line naming the flag.
+#[test]
+fn evaluate_prints_the_same_outcome_on_any_number_of_threads() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("worker-evaluate-threads");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let genome = r#"{"points": [
+      {"position": [0.3, 0.5, 0.3], "density": 1.0, "falloff": 0.3, "material": 0},
+      {"position": [0.7, 0.5, 0.3], "density": 1.0, "falloff": 0.3, "material": 1}
+    ]}"#;
+    let scene = "kind = \"locomotion\"\nworkspace = 0.02\nactuation_cycles = 2\n\
+                 [settle]\nmax_time = 0.01\n[dynamics.actuation]\nperiod = 0.02\n";
+    std::fs::write(dir.join("genome.json"), genome).unwrap();
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let evaluate = |threads: &str| {
+        worker(&[
+            "evaluate",
+            "--genome",
+            dir.join("genome.json").to_str().unwrap(),
+            "--scene",
+            dir.join("scene.toml").to_str().unwrap(),
+            "--resolution",
+            "10x10x10",
+            "--threads",
+            threads,
+        ])
+    };
+    let (ok, alone, stderr) = evaluate("1");
+    assert!(ok, "{stderr}");
+    assert!(alone.contains("\"evaluated\""), "{alone}");
+    let (ok, shared, stderr) = evaluate("3");
+    assert!(ok, "{stderr}");
+    assert_eq!(shared, alone);
+    let (ok, _, stderr) = evaluate("0");
+    assert!(!ok);
+    assert!(stderr.contains("--threads 0"), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+}

@@ -35,6 +35,8 @@ pub struct LocalWorker {
     threads: usize,
     /// Bytes one evaluation may take (the worker's share of the machine, split by its threads).
     budget_per_evaluation: u64,
+    /// Threads its evaluations share (`cluster.threads_per_evaluation`), if more than their own.
+    shared: Option<Arc<rayon::ThreadPool>>,
 }
 
 type Evaluated = (WorkerId, TaskId, Result<Outcome, String>, f64);
@@ -54,6 +56,15 @@ impl LocalWorker {
             name,
             threads,
             budget_per_evaluation: budget / threads as u64,
+            shared: None,
+        }
+    }
+
+    /// Runs each evaluation inside `pool`, whose threads share its simulation (the same bits).
+    pub fn sharing_evaluations(self, pool: Arc<rayon::ThreadPool>) -> Self {
+        Self {
+            shared: Some(pool),
+            ..self
         }
     }
 
@@ -173,10 +184,14 @@ impl LocalWorker {
             return;
         }
         active.insert(task.id);
-        let (task, scene) = (task.clone(), self.scene.clone());
+        let (task, scene, shared) = (task.clone(), self.scene.clone(), self.shared.clone());
         running.spawn_blocking(move || {
             let started = Instant::now();
-            let outcome = scene.evaluate(&task.genome, task.dims);
+            let evaluate = || scene.evaluate(&task.genome, task.dims);
+            let outcome = match shared {
+                Some(pool) => pool.install(evaluate),
+                None => evaluate(),
+            };
             (id, task.id, Ok(outcome), started.elapsed().as_secs_f64())
         });
     }

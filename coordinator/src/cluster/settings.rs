@@ -28,6 +28,9 @@ pub struct ClusterSection {
     pub local_workers: Option<usize>,
     /// Evaluation threads of each local worker.
     pub local_worker_threads: usize,
+    /// Threads that share each local evaluation (1: one thread each). The outcome is the same bits
+    /// for any count; with `local_workers` unset, the cores are divided by it.
+    pub threads_per_evaluation: usize,
     /// File holding the shared secret workers must present (surrounding whitespace ignored). The
     /// AMORPH_TOKEN environment variable, if set, takes precedence.
     pub token_file: Option<PathBuf>,
@@ -100,6 +103,7 @@ impl Default for ClusterSection {
             listen: "127.0.0.1:0".into(),
             local_workers: None,
             local_worker_threads: 1,
+            threads_per_evaluation: 1,
             token_file: None,
             tls_cert: None,
             tls_key: None,
@@ -143,6 +147,7 @@ pub struct ClusterSettings {
     /// Local workers to start (one per core when the config leaves it unset).
     pub local_workers: usize,
     pub local_worker_threads: usize,
+    pub threads_per_evaluation: usize,
     /// PEM certificate chain and private key.
     pub tls: Option<(PathBuf, PathBuf)>,
     pub rules: QueueRules,
@@ -180,11 +185,17 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
         {
             return Err(format!("cluster.listen = {:?} is not HOST:PORT", c.listen));
         }
+        let threads_per_evaluation = count(
+            "threads_per_evaluation",
+            c.threads_per_evaluation,
+            1,
+            MAX_LOCAL_THREADS,
+        )?;
         let local_workers = match c.local_workers {
             Some(n) => count("local_workers", n, 0, MAX_LOCAL_WORKERS)?,
-            None => std::thread::available_parallelism()
-                .map_or(1, |n| n.get())
-                .min(MAX_LOCAL_WORKERS),
+            None => (std::thread::available_parallelism().map_or(1, |n| n.get())
+                / threads_per_evaluation)
+                .clamp(1, MAX_LOCAL_WORKERS),
         };
         let local_worker_threads = count(
             "local_worker_threads",
@@ -223,6 +234,7 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
             listen: c.listen.clone(),
             local_workers,
             local_worker_threads,
+            threads_per_evaluation,
             tls,
             rules: QueueRules {
                 lease,
@@ -252,6 +264,24 @@ mod tests {
         assert_eq!(s.rules.lease, Duration::from_secs(10));
         assert_eq!(s.rules.worker_timeout, Duration::from_secs(5));
         assert!(s.local_workers >= 1);
+        assert_eq!(s.threads_per_evaluation, 1);
+    }
+
+    /// Threads that share an evaluation take their cores from the default count of local workers,
+    /// never below one worker.
+    #[test]
+    fn threads_per_evaluation_divide_the_default_local_workers() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let s = settings(|c| c.threads_per_evaluation = 2).unwrap();
+        assert_eq!(s.local_workers, (cores / 2).max(1));
+        let s = settings(|c| c.threads_per_evaluation = 1000).unwrap();
+        assert_eq!(s.local_workers, 1);
+        let s = settings(|c| {
+            c.threads_per_evaluation = 2;
+            c.local_workers = Some(3);
+        })
+        .unwrap();
+        assert_eq!(s.local_workers, 3, "an explicit count is kept");
     }
 
     /// Issue 12, item 4: `local_workers = 100000` panicked in the worker pool, and a lease of
@@ -259,12 +289,18 @@ mod tests {
     #[test]
     fn regression_sizes_and_durations_out_of_bounds_name_their_key() {
         type Edit = fn(&mut ClusterSection);
-        let cases: [(&str, Edit); 7] = [
+        let cases: [(&str, Edit); 9] = [
             ("cluster.local_workers = 100000", |c| {
                 c.local_workers = Some(100_000)
             }),
             ("cluster.local_worker_threads = 0", |c| {
                 c.local_worker_threads = 0
+            }),
+            ("cluster.threads_per_evaluation = 0", |c| {
+                c.threads_per_evaluation = 0
+            }),
+            ("cluster.threads_per_evaluation = 5000", |c| {
+                c.threads_per_evaluation = 5000
             }),
             ("cluster.lease_ms = 18446744073709551615", |c| {
                 c.lease_ms = u64::MAX

@@ -19,6 +19,7 @@
 
 use super::lanes::{
     Arith, LANES, Lanes, Portable, add_image3, load_columns3, load_columns4, load_image3,
+    store_image3,
 };
 use super::math::{Quat, Vec3};
 use super::state::{Links, Voxels};
@@ -239,38 +240,223 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
     voxels: &mut Voxels,
     step: LinkStep,
 ) -> f64 {
+    let nv = voxels.len();
+    // The state is read while force and torque accumulate, so the borrows are split; every array
+    // is cut to the voxel count, so that one check of an index covers all of them.
+    let Voxels {
+        position,
+        orientation,
+        velocity,
+        angular_velocity,
+        force,
+        torque,
+        ..
+    } = voxels;
+    let view = VoxelView {
+        position: &position[..nv],
+        orientation: &orientation[..nv],
+        velocity: &velocity[..nv],
+        angular_velocity: &angular_velocity[..nv],
+    };
+    let out = Scatter {
+        force: &mut force[..nv],
+        torque: &mut torque[..nv],
+    };
+    dispatch::<_, DAMPED, ACTUATED>(links, view, 0..links.len(), step, out)
+}
+
+/// The forces and moments of links `range` (its start a multiple of [`LANES`]), stored link by
+/// link instead of added to the voxels: slot k − `range.start` of `loads` holds link k's force
+/// on its b end (the a end gets its opposite) and its moments on either end. Returns the largest
+/// axial strain among them. Added to the voxels in link order (`super::parallel`), they give the
+/// bits [`link_pass`] gives, so that threads can share the links of one step.
+pub fn link_loads<const DAMPED: bool, const ACTUATED: bool>(
+    links: &Links,
+    voxels: &Voxels,
+    range: std::ops::Range<usize>,
+    step: LinkStep,
+    loads: LinkLoads,
+) -> f64 {
+    let nv = voxels.len();
+    let view = VoxelView {
+        position: &voxels.position[..nv],
+        orientation: &voxels.orientation[..nv],
+        velocity: &voxels.velocity[..nv],
+        angular_velocity: &voxels.angular_velocity[..nv],
+    };
+    let out = Store {
+        first: range.start,
+        loads,
+    };
+    dispatch::<_, DAMPED, ACTUATED>(links, view, range, step, out)
+}
+
+/// Runs the kernel with explicit AVX2 vectors where the CPU has them, else on portable lanes.
+#[inline(always)]
+fn dispatch<O: LinkOut, const DAMPED: bool, const ACTUATED: bool>(
+    links: &Links,
+    view: VoxelView,
+    range: std::ops::Range<usize>,
+    step: LinkStep,
+    out: O,
+) -> f64 {
+    let job = Job {
+        links,
+        view,
+        range,
+        step,
+        out,
+    };
     #[cfg(target_arch = "x86_64")]
     if let Some(avx2) = pulp::x86::V3::try_new() {
         return pulp::Simd::vectorize(
             avx2,
-            LinkPass::<_, DAMPED, ACTUATED> {
+            LinkPass::<_, O, DAMPED, ACTUATED> {
                 arith: avx2,
-                links,
-                voxels,
-                step,
+                job: &mut Some(job),
             },
         );
     }
-    link_pass_lanes::<_, DAMPED, ACTUATED, true>(Portable, links, voxels, step)
+    link_pass_lanes::<_, O, DAMPED, ACTUATED, true>(Portable, job)
 }
 
-/// [`link_pass`] as a `pulp` operation, so that the kernel is compiled with the instruction set
-/// of its arithmetic enabled.
-struct LinkPass<'a, A: Arith, const DAMPED: bool, const ACTUATED: bool> {
-    arith: A,
+/// What one run of the kernel reads and where it writes.
+struct Job<'a, O> {
     links: &'a Links,
-    voxels: &'a mut Voxels,
+    view: VoxelView<'a>,
+    range: std::ops::Range<usize>,
     step: LinkStep,
+    out: O,
 }
 
-impl<A: Arith, const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd
-    for LinkPass<'_, A, DAMPED, ACTUATED>
+/// The kernel as a `pulp` operation, so that it is compiled with the instruction set of its
+/// arithmetic enabled. The job goes by reference and is moved out inside: `pulp` passes an
+/// operation of more than eight words another way, which lost the inlined vector code, and a
+/// kernel that reached its slices through a reference reloaded them at every use (together 1.7
+/// times slower: docs/dynamics.md).
+struct LinkPass<'a, 'b, A: Arith, O, const DAMPED: bool, const ACTUATED: bool> {
+    arith: A,
+    job: &'a mut Option<Job<'b, O>>,
+}
+
+impl<A: Arith, O: LinkOut, const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd
+    for LinkPass<'_, '_, A, O, DAMPED, ACTUATED>
 {
     type Output = f64;
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
-        link_pass_lanes::<A, DAMPED, ACTUATED, true>(self.arith, self.links, self.voxels, self.step)
+        let job = self.job.take().expect("the job is set before the dispatch");
+        link_pass_lanes::<A, O, DAMPED, ACTUATED, true>(self.arith, job)
+    }
+}
+
+/// Per-link results of [`link_loads`], one slot per link of its range.
+#[derive(Debug)]
+pub struct LinkLoads<'a> {
+    pub force_b: &'a mut [Vec3],
+    pub moment_a: &'a mut [Vec3],
+    pub moment_b: &'a mut [Vec3],
+}
+
+/// Where the kernel puts a group's results: lane j is link k0 + j, `count` lanes are real.
+trait LinkOut {
+    /// Cuts per-voxel outputs to the voxel count, so that the check of an index into the state
+    /// also covers them (without it the kernel was 5 % slower).
+    fn cut_to(&mut self, _voxels: usize) {}
+
+    #[allow(clippy::too_many_arguments)]
+    fn put<A: Arith>(
+        &mut self,
+        k0: usize,
+        count: usize,
+        ends: &[(usize, usize, u8); LANES],
+        run: bool,
+        f_b: V3<A>,
+        m_a: V3<A>,
+        m_b: V3<A>,
+    );
+}
+
+/// Adds each link's forces and moments to its voxels, link by link in link order.
+struct Scatter<'a> {
+    force: &'a mut [Vec3],
+    torque: &'a mut [Vec3],
+}
+
+impl LinkOut for Scatter<'_> {
+    #[inline(always)]
+    fn cut_to(&mut self, voxels: usize) {
+        self.force = &mut std::mem::take(&mut self.force)[..voxels];
+        self.torque = &mut std::mem::take(&mut self.torque)[..voxels];
+    }
+
+    #[inline(always)]
+    fn put<A: Arith>(
+        &mut self,
+        _k0: usize,
+        count: usize,
+        ends: &[(usize, usize, u8); LANES],
+        run: bool,
+        f_b: V3<A>,
+        m_a: V3<A>,
+        m_b: V3<A>,
+    ) {
+        let (force, torque) = (&mut *self.force, &mut *self.torque);
+        if run {
+            // Each voxel still sums in link order: a voxel that ends one link of the run as b
+            // and a later one as a gets the earlier link's force first.
+            let (a0, b0) = (ends[0].0, ends[0].1);
+            let block = |i0: usize| i0..i0 + LANES;
+            f_b.add_to::<false>(&mut force[block(b0)]);
+            f_b.add_to::<true>(&mut force[block(a0)]);
+            m_b.add_to::<false>(&mut torque[block(b0)]);
+            m_a.add_to::<false>(&mut torque[block(a0)]);
+        } else {
+            let (f_b, m_a, m_b) = (f_b.lanes(), m_a.lanes(), m_b.lanes());
+            for (j, &(ia, ib, _)) in ends.iter().enumerate().take(count) {
+                force[ib] += f_b[j];
+                force[ia] -= f_b[j];
+                torque[ia] += m_a[j];
+                torque[ib] += m_b[j];
+            }
+        }
+    }
+}
+
+/// Stores each link's results in its slot of [`LinkLoads`] (slot 0 is link `first`).
+struct Store<'a> {
+    first: usize,
+    loads: LinkLoads<'a>,
+}
+
+impl LinkOut for Store<'_> {
+    #[inline(always)]
+    fn put<A: Arith>(
+        &mut self,
+        k0: usize,
+        count: usize,
+        _ends: &[(usize, usize, u8); LANES],
+        _run: bool,
+        f_b: V3<A>,
+        m_a: V3<A>,
+        m_b: V3<A>,
+    ) {
+        let slots = k0 - self.first..k0 - self.first + count;
+        let l = &mut self.loads;
+        for (v, out) in [
+            (f_b, &mut *l.force_b),
+            (m_a, &mut *l.moment_a),
+            (m_b, &mut *l.moment_b),
+        ] {
+            let out = &mut out[slots.clone()];
+            if count == LANES {
+                let arith = v.x.arith;
+                store_image3(arith, out, arith.image3([v.x.v, v.y.v, v.z.v]));
+            } else {
+                out.copy_from_slice(&v.lanes()[..count]);
+            }
+        }
     }
 }
 
@@ -288,7 +474,13 @@ impl<'a> VoxelView<'a> {
     /// Voxels `i0..i0 + LANES`: read through it, lane `j` is voxel `i0 + j`.
     #[inline(always)]
     fn block(&self, i0: usize) -> Self {
-        let r = i0..i0 + LANES;
+        self.block_at(i0, LANES)
+    }
+
+    /// Voxels `i0..i0 + len`.
+    #[inline(always)]
+    fn block_at(&self, i0: usize, len: usize) -> Self {
+        let r = i0..i0 + len;
         Self {
             position: &self.position[r.clone()],
             orientation: &self.orientation[r.clone()],
@@ -377,41 +569,38 @@ impl<A: Arith> Ends<A> {
 
 /// `RUNS` false reads every group through the general gather (for the test that the two agree).
 #[inline(always)]
-fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool, const RUNS: bool>(
+fn link_pass_lanes<
+    A: Arith,
+    O: LinkOut,
+    const DAMPED: bool,
+    const ACTUATED: bool,
+    const RUNS: bool,
+>(
     arith: A,
-    links: &Links,
-    voxels: &mut Voxels,
-    step: LinkStep,
+    job: Job<O>,
 ) -> f64 {
+    let Job {
+        links,
+        view,
+        range,
+        step,
+        mut out,
+    } = job;
+    // Every voxel array cut to one length here, inside the vectorized function: lengths that
+    // arrive through `pulp`'s call are unrelated to the optimizer, and each access was checked.
+    let view = view.block_at(0, view.position.len());
+    out.cut_to(view.position.len());
     let s = step.voxel_size;
     let stretch = step.actuation_factor - 1.0;
     let n = links.len();
     let splat = |x: f64| Lanes::splat(arith, x);
     let mut max_strain = splat(0.0);
-    let nv = voxels.len();
-    // The state is read while force and torque accumulate, so the borrows are split; every array
-    // is cut to the voxel count, so that one check of an index covers all of them.
-    let Voxels {
-        position,
-        orientation,
-        velocity,
-        angular_velocity,
-        force,
-        torque,
-        ..
-    } = voxels;
-    let view = VoxelView {
-        position: &position[..nv],
-        orientation: &orientation[..nv],
-        velocity: &velocity[..nv],
-        angular_velocity: &angular_velocity[..nv],
-    };
-    let force = &mut force[..nv];
-    let torque = &mut torque[..nv];
     let (end_a, end_b, link_axis) = (&links.a[..n], &links.b[..n], &links.axis[..n]);
-    let mut k0 = 0;
-    while k0 < n {
-        let count = LANES.min(n - k0);
+    // Known to the optimizer as at most n, so that a whole group's loads need no check.
+    let end = range.end.min(n);
+    let mut k0 = range.start;
+    while k0 < end {
+        let count = LANES.min(end - k0);
         // Lane j holds link k0 + j; past the end, copies of the last link (not scattered).
         let link = |j: usize| {
             let k = (k0 + j).min(n - 1);
@@ -532,23 +721,7 @@ fn link_pass_lanes<A: Arith, const DAMPED: bool, const ACTUATED: bool, const RUN
         let m_a = m_sym + c;
         let m_b = c - m_sym;
 
-        if run {
-            // Each voxel still sums in link order: a voxel that ends one link of the run as b
-            // and a later one as a gets the earlier link's force first.
-            let block = |i0: usize| i0..i0 + LANES;
-            f_b.add_to::<false>(&mut force[block(b0)]);
-            f_b.add_to::<true>(&mut force[block(a0)]);
-            m_b.add_to::<false>(&mut torque[block(b0)]);
-            m_a.add_to::<false>(&mut torque[block(a0)]);
-        } else {
-            let (f_b, m_a, m_b) = (f_b.lanes(), m_a.lanes(), m_b.lanes());
-            for (j, &(ia, ib, _)) in ends.iter().enumerate().take(count) {
-                force[ib] += f_b[j];
-                force[ia] -= f_b[j];
-                torque[ia] += m_a[j];
-                torque[ib] += m_b[j];
-            }
-        }
+        out.put(k0, count, &ends, run, f_b, m_a, m_b);
         k0 += LANES;
     }
     max_strain
@@ -640,11 +813,41 @@ mod tests {
         };
         let (mut a, mut b) = (v.clone(), v.clone());
         let strain_a = link_pass::<true, true>(&links, &mut a, step);
-        let strain_b = link_pass_lanes::<_, true, true, true>(Portable, &links, &mut b, step);
+        let portable = |voxels: &mut Voxels, runs: bool| {
+            let nv = voxels.len();
+            let Voxels {
+                position,
+                orientation,
+                velocity,
+                angular_velocity,
+                force,
+                torque,
+                ..
+            } = voxels;
+            let view = VoxelView {
+                position: &position[..nv],
+                orientation: &orientation[..nv],
+                velocity: &velocity[..nv],
+                angular_velocity: &angular_velocity[..nv],
+            };
+            let job = Job {
+                links: &links,
+                view,
+                range: 0..links.len(),
+                step,
+                out: Scatter { force, torque },
+            };
+            if runs {
+                link_pass_lanes::<_, _, true, true, true>(Portable, job)
+            } else {
+                link_pass_lanes::<_, _, true, true, false>(Portable, job)
+            }
+        };
+        let strain_b = portable(&mut b, true);
         assert_eq!(strain_a.to_bits(), strain_b.to_bits());
         // Runs (four voxels linked to four, read as blocks) against the general gather.
         let mut c = v.clone();
-        let strain_c = link_pass_lanes::<_, true, true, false>(Portable, &links, &mut c, step);
+        let strain_c = portable(&mut c, false);
         assert_eq!(strain_a.to_bits(), strain_c.to_bits());
         let bits = |w: &[Vec3]| -> Vec<[u64; 3]> {
             w.iter()

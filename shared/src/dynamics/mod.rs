@@ -7,8 +7,9 @@
 //! passes the step loop has (links, gravity, floor with Coulomb friction, self-collision,
 //! actuation, each damping kind); a disabled pass is absent from the loop.
 //!
-//! Divergence is an outcome ([`Divergence`]), never a panic, and the simulation is single-threaded
-//! and bit-reproducible.
+//! Divergence is an outcome ([`Divergence`]), never a panic, and the simulation is
+//! bit-reproducible: on one thread, or inside a `rayon` thread pool on its threads with the same
+//! bits for any number of them ([`Simulation::step`]).
 
 mod collide;
 mod error;
@@ -16,6 +17,7 @@ mod integrate;
 mod lanes;
 mod link;
 mod math;
+mod parallel;
 mod passes;
 mod poisson;
 mod scene;

@@ -10,6 +10,7 @@ use super::error::{DynamicsError, Result};
 use super::integrate::integrate_pass;
 use super::link::{LinkStep, link_energy, link_pass};
 use super::math::Vec3;
+use super::parallel::Threaded;
 use super::passes::{
     FloorContact, external_force_pass, floor_pass, global_damping_pass, gravity_pass,
 };
@@ -88,6 +89,8 @@ pub struct Simulation {
     /// The divergence that stopped the simulation, if one did: later steps return it unchanged.
     diverged: Option<Divergence>,
     actuation_time: Option<f64>,
+    /// Built at the first step run inside a thread pool (see [`Simulation::step`]).
+    threaded: Option<Threaded>,
 }
 
 impl Simulation {
@@ -166,6 +169,7 @@ impl Simulation {
             steps: 0,
             diverged: None,
             actuation_time: None,
+            threaded: None,
         };
         sim.rebuild_passes();
         Ok(sim)
@@ -344,6 +348,10 @@ impl Simulation {
 
     /// Advances one time step. On divergence the state is left as it was found diverged and
     /// every further call returns the same outcome.
+    ///
+    /// Called inside a `rayon` thread pool (`ThreadPool::install`), the step shares its link pass
+    /// and its integration among the pool's threads, with the same bits as on one thread for any
+    /// number of threads (`super::parallel`); elsewhere it runs on the calling thread alone.
     pub fn step(&mut self) -> std::result::Result<(), Divergence> {
         if let Some(d) = &self.diverged {
             return Err(d.clone());
@@ -363,15 +371,28 @@ impl Simulation {
         };
         let mut max_strain = 0.0;
         let mut summary = None;
+        let in_pool = rayon::current_thread_index().is_some();
         for k in 0..self.passes.len() {
             match self.passes[k] {
                 Pass::Links { damped, actuated } => {
                     let (l, v) = (&self.links, &mut self.voxels);
-                    max_strain = match (damped, actuated) {
-                        (false, false) => link_pass::<false, false>(l, v, link_step),
-                        (true, false) => link_pass::<true, false>(l, v, link_step),
-                        (false, true) => link_pass::<false, true>(l, v, link_step),
-                        (true, true) => link_pass::<true, true>(l, v, link_step),
+                    max_strain = if in_pool {
+                        let t = self
+                            .threaded
+                            .get_or_insert_with(|| Threaded::new(l, v.len()));
+                        match (damped, actuated) {
+                            (false, false) => t.link_pass::<false, false>(l, v, link_step),
+                            (true, false) => t.link_pass::<true, false>(l, v, link_step),
+                            (false, true) => t.link_pass::<false, true>(l, v, link_step),
+                            (true, true) => t.link_pass::<true, true>(l, v, link_step),
+                        }
+                    } else {
+                        match (damped, actuated) {
+                            (false, false) => link_pass::<false, false>(l, v, link_step),
+                            (true, false) => link_pass::<true, false>(l, v, link_step),
+                            (false, true) => link_pass::<false, true>(l, v, link_step),
+                            (true, true) => link_pass::<true, true>(l, v, link_step),
+                        }
                     };
                 }
                 Pass::Poisson => self.poisson.pass(&self.links, &mut self.voxels, link_step),
@@ -395,7 +416,13 @@ impl Simulation {
                         self.dt,
                     )
                 }
-                Pass::Integrate => summary = Some(integrate_pass(&mut self.voxels, self.dt)),
+                Pass::Integrate => {
+                    summary = Some(if in_pool {
+                        Threaded::integrate(&mut self.voxels, self.dt)
+                    } else {
+                        integrate_pass(&mut self.voxels, self.dt)
+                    });
+                }
             }
         }
         self.time += self.dt;

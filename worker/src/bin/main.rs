@@ -32,9 +32,13 @@ struct Connect {
     /// The coordinator's URL: http://HOST:PORT, or https://HOST:PORT when it serves TLS.
     #[arg(long)]
     connect: Option<String>,
-    /// Evaluations at once (default: one per core).
+    /// Evaluations at once (default: one per core, divided by --threads-per-evaluation).
     #[arg(long)]
     threads: Option<usize>,
+    /// Threads that share each evaluation (default 1). The outcome is the same bits for any
+    /// count; more pays when evaluations are fewer than cores (large robots, small batches).
+    #[arg(long, default_value_t = 1)]
+    threads_per_evaluation: usize,
     /// Shared secret the coordinator requires.
     #[arg(long, env = "AMORPH_TOKEN", hide_env_values = true)]
     token: Option<String>,
@@ -77,9 +81,30 @@ struct Design {
     /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
     #[arg(long)]
     resolution: String,
+    /// Threads that share the simulation (default 1); the outcome is the same bits for any count.
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
 }
 
 impl Design {
+    /// `f` on the calling thread, or sharing a pool of `--threads` threads.
+    fn on_threads<R: Send>(&self, f: impl FnOnce() -> R + Send) -> anyhow::Result<R> {
+        anyhow::ensure!(
+            (1..=amorph_worker::client::MAX_THREADS).contains(&self.threads),
+            "--threads {} must be between 1 and {}",
+            self.threads,
+            amorph_worker::client::MAX_THREADS
+        );
+        if self.threads == 1 {
+            return Ok(f());
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(self.threads)
+            .build()
+            .with_context(|| format!("starting {} threads", self.threads))?;
+        Ok(pool.install(f))
+    }
+
     fn load(&self) -> anyhow::Result<(Genome, Scene, GridDims)> {
         Ok((
             amorph_worker::read_genome(&self.genome)?,
@@ -143,7 +168,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             let (genome, scene, dims) = design.load()?;
             amorph::task::memory::check(&scene, dims, amorph::task::memory::default_budget())
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
-            let outcome = scene.evaluate(&genome, dims);
+            let outcome = design.on_threads(|| scene.evaluate(&genome, dims))?;
             print(&serde_json::to_string_pretty(&outcome).context("serialising the outcome")?)?;
         }
         Command::Export {
@@ -161,7 +186,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             let grid = scene.design(&genome, dims);
             // The task's own pictures (a beam's profile, a robot's walk) and a robot's VXA (its
             // measured settle) need its evaluation.
-            let outcome = scene.evaluate(&genome, dims);
+            let outcome = design.on_threads(|| scene.evaluate(&genome, dims))?;
             let mut files =
                 amorph::export::write_fabrication_files(&out, &grid, &scene, Some(&outcome))
                     .with_context(|| format!("writing into {}", out.display()))?;
@@ -224,9 +249,16 @@ fn serve(c: Connect) -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
-    let threads = c
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let per_evaluation = c.threads_per_evaluation;
+    anyhow::ensure!(
+        (1..=amorph_worker::client::MAX_THREADS).contains(&per_evaluation),
+        "--threads-per-evaluation {per_evaluation} must be between 1 and {}",
+        amorph_worker::client::MAX_THREADS
+    );
+    let threads = c.threads.unwrap_or_else(|| {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        (cores / per_evaluation).max(1)
+    });
     anyhow::ensure!(
         (1..=amorph_worker::client::MAX_THREADS).contains(&threads),
         "--threads {threads} must be between 1 and {}",
@@ -240,6 +272,7 @@ fn serve(c: Connect) -> anyhow::Result<()> {
         Ok(std::time::Duration::from_secs_f64(s))
     };
     let mut opts = WorkerOptions::new(url, threads);
+    opts.threads_per_evaluation = per_evaluation;
     if let Some(name) = c.name {
         opts.name = name;
     }
