@@ -240,9 +240,14 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
     voxels: &mut Voxels,
     step: LinkStep,
 ) -> f64 {
+    let (view, out) = scatter_into(voxels);
+    dispatch::<_, DAMPED, ACTUATED>(links, view, 0..links.len(), step, out)
+}
+
+/// The state the kernel reads and the accumulators it adds to: the borrows split, every array cut
+/// to the voxel count, so that one check of an index covers all of them.
+fn scatter_into(voxels: &mut Voxels) -> (VoxelView<'_>, Scatter<'_>) {
     let nv = voxels.len();
-    // The state is read while force and torque accumulate, so the borrows are split; every array
-    // is cut to the voxel count, so that one check of an index covers all of them.
     let Voxels {
         position,
         orientation,
@@ -262,7 +267,7 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
         force: &mut force[..nv],
         torque: &mut torque[..nv],
     };
-    dispatch::<_, DAMPED, ACTUATED>(links, view, 0..links.len(), step, out)
+    (view, out)
 }
 
 /// The forces and moments of links `range` (its start a multiple of [`LANES`]), stored link by
@@ -814,28 +819,13 @@ mod tests {
         let (mut a, mut b) = (v.clone(), v.clone());
         let strain_a = link_pass::<true, true>(&links, &mut a, step);
         let portable = |voxels: &mut Voxels, runs: bool| {
-            let nv = voxels.len();
-            let Voxels {
-                position,
-                orientation,
-                velocity,
-                angular_velocity,
-                force,
-                torque,
-                ..
-            } = voxels;
-            let view = VoxelView {
-                position: &position[..nv],
-                orientation: &orientation[..nv],
-                velocity: &velocity[..nv],
-                angular_velocity: &angular_velocity[..nv],
-            };
+            let (view, out) = scatter_into(voxels);
             let job = Job {
                 links: &links,
                 view,
                 range: 0..links.len(),
                 step,
-                out: Scatter { force, torque },
+                out,
             };
             if runs {
                 link_pass_lanes::<_, _, true, true, true>(Portable, job)
