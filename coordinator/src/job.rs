@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+use amorph::dynamics::EvaluationThreads;
 use amorph::task::memory;
 use tokio::sync::watch;
 use tracing::{info, warn};
@@ -142,21 +143,18 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     let budget = memory::default_budget() / local.max(1) as u64;
     let mut workers = Vec::with_capacity(local);
     for i in 0..local {
-        let mut worker = LocalWorker::new(
+        let threads = EvaluationThreads::new(settings.threads_per_evaluation, move |j| {
+            format!("local-{i}.{j}")
+        })
+        .map_err(|e| JobError::Runtime(std::io::Error::other(e)))?;
+        let worker = LocalWorker::new(
             queue.clone(),
             scene.clone(),
             format!("local-{i}"),
             settings.local_worker_threads,
             budget,
-        );
-        if settings.threads_per_evaluation > 1 {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(settings.threads_per_evaluation)
-                .thread_name(move |j| format!("local-{i}.{j}"))
-                .build()
-                .map_err(|e| JobError::Runtime(std::io::Error::other(e)))?;
-            worker = worker.sharing_evaluations(Arc::new(pool));
-        }
+        )
+        .sharing_evaluations(threads);
         workers.push(runtime.spawn(worker.run(stop_rx.clone())));
     }
     info!(%url, local_workers = local, store = %store.path().display(), "coordinator ready");

@@ -6,6 +6,7 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use amorph::dynamics::EvaluationThreads;
 use amorph::genome::Genome;
 use amorph::outcome::Failure;
 use amorph::task::Outcome;
@@ -50,8 +51,9 @@ pub struct Pool {
 }
 
 impl Pool {
-    /// Starts `threads` threads, each evaluating on `per_evaluation` threads (itself included
-    /// when 1); fails (instead of panicking) when the system will not give them.
+    /// Starts `threads` threads, each sharing its evaluations with `per_evaluation` threads of
+    /// its own (1: evaluating alone); fails (instead of panicking) when the system will not give
+    /// them.
     pub fn new(
         threads: usize,
         per_evaluation: usize,
@@ -63,18 +65,12 @@ impl Pool {
         for i in 0..threads {
             let queue = queue.clone();
             let done = done.clone();
-            let shared = (per_evaluation > 1)
-                .then(|| {
-                    rayon::ThreadPoolBuilder::new()
-                        .num_threads(per_evaluation)
-                        .thread_name(move |j| format!("evaluate-{i}.{j}"))
-                        .build()
-                        .map_err(std::io::Error::other)
-                })
-                .transpose()?;
+            let shared =
+                EvaluationThreads::new(per_evaluation, move |j| format!("evaluate-{i}.{j}"))
+                    .map_err(std::io::Error::other)?;
             std::thread::Builder::new()
                 .name(format!("evaluate-{i}"))
-                .spawn(move || work(&queue, shared.as_ref(), mode, &done))?;
+                .spawn(move || work(&queue, &shared, mode, &done))?;
         }
         Ok(Self { jobs, threads })
     }
@@ -91,7 +87,7 @@ impl Pool {
 
 fn work(
     queue: &Mutex<Receiver<Job>>,
-    shared: Option<&rayon::ThreadPool>,
+    shared: &EvaluationThreads,
     mode: EvaluationMode,
     done: &UnboundedSender<JobDone>,
 ) {
@@ -105,13 +101,7 @@ fn work(
         };
         let started = Instant::now();
         let outcome = match mode {
-            EvaluationMode::Physics => {
-                let evaluate = || job.scene.evaluate(&job.genome, job.dims);
-                match shared {
-                    Some(pool) => pool.install(evaluate),
-                    None => evaluate(),
-                }
-            }
+            EvaluationMode::Physics => shared.run(|| job.scene.evaluate(&job.genome, job.dims)),
             EvaluationMode::Instant => Outcome::failed(Failure::Empty),
         };
         let finished = JobDone {

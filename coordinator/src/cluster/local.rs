@@ -8,6 +8,7 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Instant;
 
+use amorph::dynamics::EvaluationThreads;
 use amorph::task::memory;
 use amorph::task::{Outcome, Scene};
 use tokio::sync::watch;
@@ -35,8 +36,8 @@ pub struct LocalWorker {
     threads: usize,
     /// Bytes one evaluation may take (the worker's share of the machine, split by its threads).
     budget_per_evaluation: u64,
-    /// Threads its evaluations share (`cluster.threads_per_evaluation`), if more than their own.
-    shared: Option<Arc<rayon::ThreadPool>>,
+    /// The threads each evaluation runs on (`cluster.threads_per_evaluation`).
+    shared: Arc<EvaluationThreads>,
 }
 
 type Evaluated = (WorkerId, TaskId, Result<Outcome, String>, f64);
@@ -56,14 +57,14 @@ impl LocalWorker {
             name,
             threads,
             budget_per_evaluation: budget / threads as u64,
-            shared: None,
+            shared: Arc::default(),
         }
     }
 
-    /// Runs each evaluation inside `pool`, whose threads share its simulation (the same bits).
-    pub fn sharing_evaluations(self, pool: Arc<rayon::ThreadPool>) -> Self {
+    /// Runs each evaluation on `threads`, which share its simulation (the same bits).
+    pub fn sharing_evaluations(self, threads: EvaluationThreads) -> Self {
         Self {
-            shared: Some(pool),
+            shared: Arc::new(threads),
             ..self
         }
     }
@@ -187,11 +188,7 @@ impl LocalWorker {
         let (task, scene, shared) = (task.clone(), self.scene.clone(), self.shared.clone());
         running.spawn_blocking(move || {
             let started = Instant::now();
-            let evaluate = || scene.evaluate(&task.genome, task.dims);
-            let outcome = match shared {
-                Some(pool) => pool.install(evaluate),
-                None => evaluate(),
-            };
+            let outcome = shared.run(|| scene.evaluate(&task.genome, task.dims));
             (id, task.id, Ok(outcome), started.elapsed().as_secs_f64())
         });
     }

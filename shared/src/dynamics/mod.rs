@@ -26,6 +26,7 @@ mod state;
 
 pub use error::{DynamicsError, Result};
 pub use math::{Mat3, Quat, Vec3};
+pub use parallel::EvaluationThreads;
 pub use scene::{
     Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, FrictionLaw, foam_palette,
 };

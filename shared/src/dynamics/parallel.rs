@@ -23,13 +23,43 @@ const LINK_GRAIN: usize = 256;
 const VOXEL_GRAIN: usize = 128;
 
 /// The part size for `n` items on the current pool: two parts per thread, so that a thread slowed
-/// by other work on its core hands part of its share to the others (finer cuts cost more in
-/// hand-overs than they gain: docs/dynamics.md), but no part smaller than `least`; a multiple of
-/// four.
+/// by other work on its core can hand part of its share to the others (1, 2, 4 and 8 parts per
+/// thread measured alike within this machine's noise: docs/dynamics.md), but no part smaller than
+/// `least`; a multiple of four.
 fn grain(n: usize, least: usize) -> usize {
     n.div_ceil(2 * rayon::current_num_threads())
         .next_multiple_of(4)
         .max(least)
+}
+
+/// The threads one evaluation runs on: the caller's alone, or a pool whose threads share each
+/// simulation step run inside it ([`EvaluationThreads::run`]), with the same bits either way.
+#[derive(Debug, Default)]
+pub struct EvaluationThreads(Option<rayon::ThreadPool>);
+
+impl EvaluationThreads {
+    /// `threads` threads, named by `name` (thread j of the pool); 1 is the caller's thread alone.
+    pub fn new(
+        threads: usize,
+        name: impl Fn(usize) -> String + 'static,
+    ) -> Result<Self, rayon::ThreadPoolBuildError> {
+        if threads <= 1 {
+            return Ok(Self(None));
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(name)
+            .build()?;
+        Ok(Self(Some(pool)))
+    }
+
+    /// `f` (e.g. a task's evaluation) on these threads.
+    pub fn run<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        match &self.0 {
+            Some(pool) => pool.install(f),
+            None => f(),
+        }
+    }
 }
 
 /// What a threaded step needs besides the simulation's state: which links each voxel adds, and

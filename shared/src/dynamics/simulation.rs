@@ -375,24 +375,11 @@ impl Simulation {
         for k in 0..self.passes.len() {
             match self.passes[k] {
                 Pass::Links { damped, actuated } => {
-                    let (l, v) = (&self.links, &mut self.voxels);
-                    max_strain = if in_pool {
-                        let t = self
-                            .threaded
-                            .get_or_insert_with(|| Threaded::new(l, v.len()));
-                        match (damped, actuated) {
-                            (false, false) => t.link_pass::<false, false>(l, v, link_step),
-                            (true, false) => t.link_pass::<true, false>(l, v, link_step),
-                            (false, true) => t.link_pass::<false, true>(l, v, link_step),
-                            (true, true) => t.link_pass::<true, true>(l, v, link_step),
-                        }
-                    } else {
-                        match (damped, actuated) {
-                            (false, false) => link_pass::<false, false>(l, v, link_step),
-                            (true, false) => link_pass::<true, false>(l, v, link_step),
-                            (false, true) => link_pass::<false, true>(l, v, link_step),
-                            (true, true) => link_pass::<true, true>(l, v, link_step),
-                        }
+                    max_strain = match (damped, actuated) {
+                        (false, false) => self.links::<false, false>(in_pool, link_step),
+                        (true, false) => self.links::<true, false>(in_pool, link_step),
+                        (false, true) => self.links::<false, true>(in_pool, link_step),
+                        (true, true) => self.links::<true, true>(in_pool, link_step),
                     };
                 }
                 Pass::Poisson => self.poisson.pass(&self.links, &mut self.voxels, link_step),
@@ -452,6 +439,22 @@ impl Simulation {
             }));
         }
         Ok(())
+    }
+
+    /// The link pass, on the current pool's threads when `in_pool`; returns the largest strain.
+    fn links<const DAMPED: bool, const ACTUATED: bool>(
+        &mut self,
+        in_pool: bool,
+        step: LinkStep,
+    ) -> f64 {
+        let (l, v) = (&self.links, &mut self.voxels);
+        if in_pool {
+            self.threaded
+                .get_or_insert_with(|| Threaded::new(l, v.len()))
+                .link_pass::<DAMPED, ACTUATED>(l, v, step)
+        } else {
+            link_pass::<DAMPED, ACTUATED>(l, v, step)
+        }
     }
 
     /// Runs for `duration` seconds (rounded up to whole steps).

@@ -5,6 +5,7 @@
 
 use std::path::PathBuf;
 
+use amorph::dynamics::EvaluationThreads;
 use amorph::genome::Genome;
 use amorph::task::Scene;
 use amorph::voxel::GridDims;
@@ -89,20 +90,10 @@ struct Design {
 impl Design {
     /// `f` on the calling thread, or sharing a pool of `--threads` threads.
     fn on_threads<R: Send>(&self, f: impl FnOnce() -> R + Send) -> anyhow::Result<R> {
-        anyhow::ensure!(
-            (1..=amorph_worker::client::MAX_THREADS).contains(&self.threads),
-            "--threads {} must be between 1 and {}",
-            self.threads,
-            amorph_worker::client::MAX_THREADS
-        );
-        if self.threads == 1 {
-            return Ok(f());
-        }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(self.threads)
-            .build()
-            .with_context(|| format!("starting {} threads", self.threads))?;
-        Ok(pool.install(f))
+        let threads = thread_count("--threads", self.threads)?;
+        let shared = EvaluationThreads::new(threads, |j| format!("evaluate-{j}"))
+            .with_context(|| format!("starting {threads} threads"))?;
+        Ok(shared.run(f))
     }
 
     fn load(&self) -> anyhow::Result<(Genome, Scene, GridDims)> {
@@ -238,6 +229,16 @@ fn print(text: &str) -> anyhow::Result<()> {
     }
 }
 
+/// `n` for a thread-count flag, or one line naming the flag and its bounds.
+fn thread_count(flag: &str, n: usize) -> anyhow::Result<usize> {
+    let max = amorph_worker::client::MAX_THREADS;
+    anyhow::ensure!(
+        (1..=max).contains(&n),
+        "{flag} {n} must be between 1 and {max}"
+    );
+    Ok(n)
+}
+
 fn serve(c: Connect) -> anyhow::Result<()> {
     let Some(url) = c.connect else {
         anyhow::bail!("give --connect URL to serve a coordinator, or a command (see --help)");
@@ -249,21 +250,14 @@ fn serve(c: Connect) -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
-    let per_evaluation = c.threads_per_evaluation;
-    anyhow::ensure!(
-        (1..=amorph_worker::client::MAX_THREADS).contains(&per_evaluation),
-        "--threads-per-evaluation {per_evaluation} must be between 1 and {}",
-        amorph_worker::client::MAX_THREADS
-    );
-    let threads = c.threads.unwrap_or_else(|| {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        (cores / per_evaluation).max(1)
-    });
-    anyhow::ensure!(
-        (1..=amorph_worker::client::MAX_THREADS).contains(&threads),
-        "--threads {threads} must be between 1 and {}",
-        amorph_worker::client::MAX_THREADS
-    );
+    let per_evaluation = thread_count("--threads-per-evaluation", c.threads_per_evaluation)?;
+    let threads = thread_count(
+        "--threads",
+        c.threads.unwrap_or_else(|| {
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            (cores / per_evaluation).max(1)
+        }),
+    )?;
     let seconds = |name: &str, s: f64| {
         anyhow::ensure!(
             s.is_finite() && s >= 0.0,
