@@ -59,6 +59,10 @@ pub struct RawConfig {
     pub scene: Scene,
 }
 
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
 fn default_results_dir() -> PathBuf {
     PathBuf::from("results")
 }
@@ -72,6 +76,13 @@ pub struct SearchSection {
     pub islands: usize,
     /// Children each island breeds per epoch (evaluated in parallel).
     pub children_per_epoch: usize,
+    /// Islands on demand: with N > 0 the run starts as one island of `islands × population`
+    /// breeding `islands × children_per_epoch` children an epoch, and splits it into `islands`
+    /// islands (dealt by rank) once the run's best at the finest resolution has improved by less
+    /// than `resolution.min_improvement` for N epochs in a row. 0 (the default): the islands exist
+    /// from the first epoch, as in the paper.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub split_after_stall: usize,
     /// Gaussian points in each initial random genome.
     pub initial_points: usize,
     pub mutation: MutationParams,
@@ -101,6 +112,7 @@ impl Default for SearchSection {
             population: 50,
             islands: 1,
             children_per_epoch: 50,
+            split_after_stall: 0,
             initial_points: 40,
             mutation: MutationParams::default(),
             migration: MigrationParams::default(),
@@ -221,6 +233,18 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
         return Err(format!(
             "search.islands x search.children_per_epoch = {} children per epoch, at most {MAX_INDIVIDUALS}",
             s.islands * s.children_per_epoch
+        ));
+    }
+    if s.split_after_stall > 0 && s.islands < 2 {
+        return Err(format!(
+            "search.split_after_stall = {} needs search.islands of 2 or more (the count to split into)",
+            s.split_after_stall
+        ));
+    }
+    if s.split_after_stall > 0 && raw.resolution.merge_islands {
+        return Err(format!(
+            "search.split_after_stall = {} and resolution.merge_islands = true contradict each other (a run that splits late has nothing to merge at a switch)",
+            s.split_after_stall
         ));
     }
     let limits = raw.scene.limits();
@@ -373,6 +397,16 @@ target = "straight"
                 "[budget]",
                 "[search]\nchildren_per_epoch = 4611686018427387904\n[budget]",
                 "search.children_per_epoch",
+            ),
+            (
+                "[budget]",
+                "[search]\nsplit_after_stall = 5\n[budget]",
+                "search.split_after_stall = 5 needs search.islands",
+            ),
+            (
+                "levels = [[6, 20, 6]]",
+                "levels = [[6, 20, 6]]\nmerge_islands = true\n[search]\nislands = 2\npopulation = 4\nsplit_after_stall = 5",
+                "search.split_after_stall = 5 and resolution.merge_islands",
             ),
             (
                 "[budget]",

@@ -115,6 +115,7 @@ pub fn run(
             "epoch done"
         );
         search.switch_if_stalled(config, evaluator, ctx)?;
+        search.split_if_stalled(config);
     };
 
     let dims = schedule.dims(search.resolution.level);

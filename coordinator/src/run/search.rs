@@ -20,8 +20,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
-    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, merge_order,
-    migrate,
+    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, SplitWatch,
+    merge_order, migrate, split_island,
 };
 use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
 use crate::summary::{HistoryRow, fittest};
@@ -45,8 +45,11 @@ pub(super) struct Search {
     pub(super) clock: RunClock,
     breeding: Breeding,
     /// Children each island breeds per epoch: the configured count, times the islands merged
-    /// into one at a resolution switch (`resolution.merge_islands`), so the batch stays the same.
+    /// into one at a resolution switch (`resolution.merge_islands`) or not yet split from one
+    /// (`search.split_after_stall`), so the batch stays the same.
     children_per_island: usize,
+    /// Islands on demand: when the one population splits into the configured islands.
+    split: SplitWatch,
     /// With `resolution.stall_on_finest`: the last best genome evaluated at the finest level at
     /// this coarse level, and the best rank such a check has given (what the stall rule watches).
     finest_checked: Option<Genome>,
@@ -91,13 +94,20 @@ impl Search {
         let mut migration_rng = ChaCha8Rng::seed_from_u64(raw.seed);
         migration_rng.set_stream(0);
 
-        let mut rngs: Vec<ChaCha8Rng> = (0..raw.search.islands).map(island_rng).collect();
+        // Islands on demand start as one island holding (and breeding for) all of them.
+        let on_demand = raw.search.split_after_stall > 0;
+        let (islands, together) = if on_demand {
+            (1, raw.search.islands)
+        } else {
+            (raw.search.islands, 1)
+        };
+        let mut rngs: Vec<ChaCha8Rng> = (0..islands).map(island_rng).collect();
         let initial: Vec<Vec<Genome>> = rngs
             .iter_mut()
             .map(|rng| {
                 Island::initial_genomes(
                     rng,
-                    raw.search.population,
+                    raw.search.population * together,
                     raw.search.initial_points,
                     &breeding,
                 )
@@ -122,7 +132,8 @@ impl Search {
                 earlier: ctx.store.recorded_wall_seconds()?,
             },
             breeding,
-            children_per_island: raw.search.children_per_epoch,
+            children_per_island: raw.search.children_per_epoch * together,
+            split: SplitWatch::new(raw.search.split_after_stall),
             finest_checked: None,
             finest_best: f64::NEG_INFINITY,
             overlap: None,
@@ -373,6 +384,30 @@ impl Search {
             }
         }
         Ok(())
+    }
+
+    /// Islands on demand: splits the one population into the configured islands once the run's
+    /// best at the finest resolution has stalled for `search.split_after_stall` epochs. The split
+    /// islands draw from the streams after merging's (`islands + 2` onwards).
+    pub(super) fn split_if_stalled(&mut self, config: &RunConfig) {
+        let raw = &config.raw;
+        if !self.resolution.is_final(&raw.resolution)
+            || !(self.split).observe(self.best().outcome.rank(), raw.resolution.min_improvement)
+        {
+            return;
+        }
+        if let Some(overlap) = self.overlap.take() {
+            self.drop_overlap(overlap);
+        }
+        let whole = self.islands.pop().expect("an unsplit run has one island");
+        let islands = raw.search.islands;
+        info!(
+            epoch = self.epoch,
+            islands,
+            "splitting the population into islands (progress stalled at the finest resolution)"
+        );
+        self.islands = split_island(whole, islands, raw.seed, islands as u64 + 2);
+        self.children_per_island = raw.search.children_per_epoch;
     }
 
     pub(super) fn best(&self) -> &Individual {

@@ -1,5 +1,5 @@
 //! The evolutionary search: deterministic-crowding islands bred in epochs, migration between them,
-//! and the multi-resolution schedule.
+//! islands on demand, and the multi-resolution schedule.
 
 mod combination;
 mod diversity;
@@ -9,6 +9,8 @@ mod insertion;
 mod island;
 mod migration;
 mod resolution;
+mod split;
+mod stall;
 mod variation;
 
 pub use diversity::{
@@ -21,4 +23,5 @@ pub use migration::{
     genome_distance, migrate,
 };
 pub use resolution::{ResolutionSchedule, ResolutionState, merge_order};
+pub use split::{SplitWatch, split_island};
 pub use variation::{CrossoverParams, LocalSearchParams, StepAdaptation, StepRule, Variation};

@@ -6,6 +6,7 @@
 use amorph::voxel::GridDims;
 
 use super::island::Island;
+use super::stall::Stall;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -134,40 +135,28 @@ impl ResolutionSchedule {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ResolutionState {
     pub level: usize,
-    best_at_last_progress: f64,
-    epochs_without_progress: usize,
+    stall: Stall,
 }
 
 impl ResolutionState {
     pub fn new() -> Self {
         Self {
             level: 0,
-            best_at_last_progress: f64::NEG_INFINITY,
-            epochs_without_progress: 0,
+            stall: Stall::new(),
         }
     }
 
     /// Records the best fitness after an epoch that brought the run to `evaluations`; returns true
     /// when the run should move to the next level (and then resets the stall tracking for it).
     pub fn observe(&mut self, best: f64, evaluations: u64, schedule: &ResolutionSchedule) -> bool {
-        let threshold = self.best_at_last_progress
-            + schedule.min_improvement * self.best_at_last_progress.abs();
-        if best > threshold || !self.best_at_last_progress.is_finite() {
-            self.best_at_last_progress = best;
-            self.epochs_without_progress = 0;
-        } else {
-            self.epochs_without_progress += 1;
-        }
+        let stalled = self.stall.observe(best, schedule.min_improvement);
         let overdue = schedule
             .latest_switch
             .get(self.level)
             .is_some_and(|&latest| evaluations >= latest);
-        if self.level + 1 < schedule.levels.len()
-            && (self.epochs_without_progress >= schedule.stall_epochs || overdue)
-        {
+        if self.level + 1 < schedule.levels.len() && (stalled >= schedule.stall_epochs || overdue) {
             self.level += 1;
-            self.best_at_last_progress = f64::NEG_INFINITY;
-            self.epochs_without_progress = 0;
+            self.stall = Stall::new();
             return true;
         }
         false

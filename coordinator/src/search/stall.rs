@@ -1,0 +1,60 @@
+//! Progress that stalls: epochs in a row in which the run's best improved by less than a set
+//! fraction of its own magnitude. The resolution schedule moves to a finer level on a stall, and
+//! islands on demand split the population on one (`search.split_after_stall`); both read the same
+//! rule so that "stalled" means one thing in a config.
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stall {
+    best_at_last_progress: f64,
+    epochs_without_progress: usize,
+}
+
+impl Stall {
+    pub fn new() -> Self {
+        Self {
+            best_at_last_progress: f64::NEG_INFINITY,
+            epochs_without_progress: 0,
+        }
+    }
+
+    /// Records the best fitness after an epoch; returns how many epochs in a row have now passed
+    /// without the best rising by more than `min_improvement` times its magnitude at the last
+    /// progress. The first observation is always progress.
+    pub fn observe(&mut self, best: f64, min_improvement: f64) -> usize {
+        let threshold =
+            self.best_at_last_progress + min_improvement * self.best_at_last_progress.abs();
+        if best > threshold || !self.best_at_last_progress.is_finite() {
+            self.best_at_last_progress = best;
+            self.epochs_without_progress = 0;
+        } else {
+            self.epochs_without_progress += 1;
+        }
+        self.epochs_without_progress
+    }
+}
+
+impl Default for Stall {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Improvement is relative to the best at the last progress, not to the previous epoch: many
+    /// small gains that add up to less than the threshold are one long stall.
+    #[test]
+    fn small_gains_that_do_not_add_up_are_a_stall() {
+        let mut s = Stall::new();
+        assert_eq!(s.observe(-10.0, 0.1), 0);
+        assert_eq!(s.observe(-9.5, 0.1), 1); // 5 % better
+        assert_eq!(s.observe(-9.1, 0.1), 2); // 9 % better than -10 in all
+        assert_eq!(s.observe(-8.9, 0.1), 0); // 11 %: progress, from -8.9 on
+        assert_eq!(s.observe(-8.9, 0.1), 1);
+        assert_eq!(s.observe(-20.0, 0.1), 2); // worse is no progress either
+    }
+}
