@@ -13,12 +13,22 @@ use std::path::Path;
 /// at 60 evaluations. `min_improvement = 0.5` makes nearly every epoch a stall, so the run splits
 /// two epochs into the finest level, well inside the budget.
 fn on_demand(results_dir: &Path, evaluations: u64, split_after_stall: usize) -> RunConfig {
+    beam(results_dir, evaluations, 3, 4, split_after_stall)
+}
+
+fn beam(
+    results_dir: &Path,
+    evaluations: u64,
+    islands: usize,
+    population: usize,
+    split_after_stall: usize,
+) -> RunConfig {
     let sections = format!(
         r#"
 [search]
-population = 4
-islands = 3
-children_per_epoch = 4
+population = {population}
+islands = {islands}
+children_per_epoch = {population}
 initial_points = 20
 split_after_stall = {split_after_stall}
 [search.migration]
@@ -136,26 +146,6 @@ fn a_run_that_never_splits_is_one_island_of_the_whole() {
     let dir = scratch_dir("never-split");
     let never = run_locally(&on_demand(&dir, 264, 1000), 2);
     assert_eq!(never.populations.len(), 1);
-    let whole = circular_arc(
-        "on-demand",
-        3,
-        &scratch_dir("one-island-of-12"),
-        r#"
-[search]
-population = 12
-islands = 1
-children_per_epoch = 12
-initial_points = 20
-[search.migration]
-interval = 0
-[budget]
-evaluations = 264
-[resolution]
-levels = [[3, 9, 3], [4, 12, 4]]
-stall_epochs = 1000
-min_improvement = 0.5
-latest_switch = [60]
-"#,
-    );
+    let whole = beam(&scratch_dir("one-island-of-12"), 264, 1, 12, 0);
     assert_eq!(fingerprint(&run_locally(&whole, 2)), fingerprint(&never));
 }
