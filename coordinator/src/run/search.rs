@@ -396,9 +396,9 @@ impl Search {
         {
             return;
         }
-        if let Some(overlap) = self.overlap.take() {
-            self.drop_overlap(overlap);
-        }
+        // Children bred ahead wait only beside a coarse level's finest check; the switch to the
+        // finest level drops them, so none can be held from the islands before the split.
+        debug_assert!(self.overlap.is_none(), "children held at the finest level");
         let whole = self.islands.pop().expect("an unsplit run has one island");
         let islands = raw.search.islands;
         info!(

@@ -1,10 +1,10 @@
 //! Islands on demand (`search.split_after_stall`): a run breeds one population of
 //! `islands × population` individuals, `islands × children_per_epoch` children an epoch, while its
 //! best improves at the finest resolution, and splits it into `islands` islands only once that
-//! best stalls. Islands started at once pay on smooth targets, where one population climbs
-//! faster than any split of it, and win where one population sticks (the discontinuous slope):
-//! docs/evolution.md, sessions 21–26. Splitting on demand keeps one population's climb until it
-//! stops and only then spends the batch on separate lineages.
+//! best stalls: one population's climb until it stops, and only then the batch spent on separate
+//! lineages. Measured in docs/evolution.md, session 26: it split on 2 runs of 17, helped one
+//! (the discontinuous slope's stuck seed) and slowed the other, because the dealt islands hold
+//! designs bred together rather than new lineages; off by default and recommended nowhere.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
