@@ -1,0 +1,204 @@
+//! The island curve of issue 13 from its recorded runs: evaluations to the paper's Table III value
+//! against the number of islands, per target, at an equal total (islands × population = 48 and a
+//! batch of 48; docs/evolution.md, sessions 21–27).
+//!
+//! `cargo bench -p amorph-coordinator --bench island_curve -- $PWD/docs/data/island_curve.csv
+//! $PWD/docs/img/island_curve.png` (a bench runs in its package's folder, hence the absolute paths)
+//!
+//! The CSV holds one row per run, `target,islands,population,seed,evaluations,session`, where
+//! `evaluations` is the count at which the run first reached the paper's value, or `>N` for a run
+//! stopped short after N. Prints one Markdown row per target and island count (runs, median,
+//! quartiles, and P: the probability that a run of that count reaches the paper's value before a
+//! one-island run, ties counting half) and draws the medians, one line per target, each divided
+//! by its target's one-island median.
+//!
+//! A stopped run counts as later than any finished one, so a median or quartile that falls on one
+//! is "beyond" the budget, whatever the budget was. One island is every one-island run of the
+//! target, population 48 and 50 together: the same search from two more or fewer random designs
+//! (session 26 found the two samples' medians 1.8–2.3 times apart, both ways, so neither alone is
+//! the baseline).
+
+use std::collections::BTreeMap;
+
+use amorph::export::{PlotSpec, Series, line_plot_over};
+
+/// Evaluations to the paper's value; `None` for a run stopped short of it.
+type Reach = Option<u64>;
+
+struct Run {
+    target: String,
+    islands: u32,
+    reach: Reach,
+}
+
+fn parse(path: &str, text: &str) -> Result<Vec<Run>, String> {
+    let mut lines = text.lines().enumerate();
+    let header = lines.next().map(|(_, l)| l.trim());
+    if header != Some("target,islands,population,seed,evaluations,session") {
+        return Err(format!(
+            "{path}:1: expected the header target,islands,population,seed,evaluations,session"
+        ));
+    }
+    let mut runs = Vec::new();
+    for (i, line) in lines {
+        let at = |what: &str| format!("{path}:{}: {what}", i + 1);
+        if line.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let [target, islands, _population, _seed, evaluations, _session] = fields[..] else {
+            return Err(at("expected six comma-separated fields"));
+        };
+        let islands = islands
+            .parse()
+            .ok()
+            .filter(|&n: &u32| n > 0)
+            .ok_or_else(|| at("islands: a positive count"))?;
+        let reach = match evaluations.strip_prefix('>') {
+            Some(stopped) => stopped
+                .parse::<u64>()
+                .map(|_| None)
+                .map_err(|_| at("evaluations: >N for a stopped run"))?,
+            None => Some(
+                evaluations
+                    .parse()
+                    .map_err(|_| at("evaluations: a count, or >N for a stopped run"))?,
+            ),
+        };
+        runs.push(Run {
+            target: target.to_string(),
+            islands,
+            reach,
+        });
+    }
+    Ok(runs)
+}
+
+/// Sort key that puts a stopped run after every finished one.
+fn late(r: &Reach) -> u64 {
+    r.unwrap_or(u64::MAX)
+}
+
+/// The median (the midpoint of the middle two for an even count) and the quartiles as
+/// `deploy/study.sh summary` takes them (the run at rank f·(n − 1), ties to even); `None` where
+/// that falls on a stopped run.
+fn median(sorted: &[Reach]) -> Option<f64> {
+    let n = sorted.len();
+    let (lo, hi) = (sorted[(n - 1) / 2]?, sorted[n / 2]?);
+    Some(0.5 * (lo + hi) as f64)
+}
+
+fn quartile(sorted: &[Reach], f: f64) -> Option<f64> {
+    let rank = (f * (sorted.len() - 1) as f64).round_ties_even() as usize;
+    sorted[rank].map(|v| v as f64)
+}
+
+/// P(a run of `a` reaches the value before a run of `b`), ties half; two stopped runs tie.
+fn faster(a: &[Reach], b: &[Reach]) -> f64 {
+    let wins: f64 = a
+        .iter()
+        .flat_map(|x| b.iter().map(move |y| (late(x), late(y))))
+        .map(|(x, y)| match x.cmp(&y) {
+            std::cmp::Ordering::Less => 1.0,
+            std::cmp::Ordering::Equal => 0.5,
+            std::cmp::Ordering::Greater => 0.0,
+        })
+        .sum();
+    wins / (a.len() * b.len()) as f64
+}
+
+const COLOURS: [[u8; 3]; 4] = [
+    [31, 119, 180],
+    [214, 39, 40],
+    [44, 160, 44],
+    [148, 103, 189],
+];
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    let Some(csv) = args.first() else {
+        eprintln!("island_curve: usage: <runs.csv> [<curve.png>]");
+        std::process::exit(2);
+    };
+    let runs = std::fs::read_to_string(csv)
+        .map_err(|e| format!("{csv}: {e}"))
+        .and_then(|text| parse(csv, &text))
+        .unwrap_or_else(|e| {
+            eprintln!("island_curve: {e}");
+            std::process::exit(2);
+        });
+    let mut by_target: BTreeMap<&str, BTreeMap<u32, Vec<Reach>>> = BTreeMap::new();
+    for run in &runs {
+        by_target
+            .entry(&run.target)
+            .or_default()
+            .entry(run.islands)
+            .or_default()
+            .push(run.reach);
+    }
+    let show = |v: Option<f64>| v.map_or("beyond".to_string(), |v| format!("{v:.0}"));
+    println!("| target | islands | runs | median | quartiles | P(faster than one island) |");
+    println!("|---|---|---|---|---|---|");
+    let mut series = Vec::new();
+    for (k, (target, counts)) in by_target.iter_mut().enumerate() {
+        for reaches in counts.values_mut() {
+            reaches.sort_by_key(late);
+        }
+        let one = counts.get(&1).cloned();
+        // Each target against its own one-island median, so that four targets of different
+        // difficulty share one axis and "not worse than one island" is the line at 1.
+        let scale = one.as_deref().and_then(median).unwrap_or(f64::NAN);
+        let mut points = Vec::new();
+        for (&islands, reaches) in counts.iter() {
+            let median = median(reaches);
+            let p = match (&one, islands) {
+                (Some(one), i) if i > 1 => format!("{:.2}", faster(reaches, one)),
+                _ => "–".to_string(),
+            };
+            println!(
+                "| {target} | {islands} | {} | {} | {}–{} | {p} |",
+                reaches.len(),
+                show(median),
+                show(quartile(reaches, 0.25)),
+                show(quartile(reaches, 0.75)),
+            );
+            // log2 on a linear axis: a decade axis would run on to 100 islands.
+            points.push([
+                f64::from(islands).log2(),
+                median.unwrap_or(f64::NAN) / scale,
+            ]);
+        }
+        series.push(Series {
+            label: target.replace('_', " "),
+            colour: COLOURS[k % COLOURS.len()],
+            points,
+            markers: true,
+        });
+    }
+    series.push(Series {
+        label: "one island".into(),
+        colour: [150, 150, 150],
+        points: vec![[0.0, 1.0], [4.0, 1.0]],
+        markers: false,
+    });
+    if let Some(png) = args.get(1) {
+        let spec = PlotSpec {
+            title: "Islands at an equal total of 48 designs".into(),
+            x_label: "islands, log2 (0: one island, 4: sixteen)".into(),
+            y_label: "median evaluations to Table III value, relative to one island".into(),
+            log_x: false,
+            log_y: false,
+        };
+        let bytes = line_plot_over(&spec, &series, [None, Some((0.4, 1.6))])
+            .to_png()
+            .unwrap_or_else(|e| panic!("PNG encoding: {e}"));
+        std::fs::write(png, bytes).unwrap_or_else(|e| {
+            eprintln!("island_curve: {png}: {e}");
+            std::process::exit(1);
+        });
+        eprintln!("island_curve: wrote {png}");
+    }
+}
