@@ -147,15 +147,15 @@ fn main() {
         for reaches in counts.values_mut() {
             reaches.sort_by_key(late);
         }
-        let one = counts.get(&1).cloned();
+        let one = counts.get(&1);
         // Each target against its own one-island median, so that four targets of different
         // difficulty share one axis and "not worse than one island" is the line at 1.
-        let scale = one.as_deref().and_then(median).unwrap_or(f64::NAN);
+        let scale = one.and_then(|one| median(one)).unwrap_or(f64::NAN);
         let mut points = Vec::new();
         for (&islands, reaches) in counts.iter() {
             let median = median(reaches);
-            let p = match (&one, islands) {
-                (Some(one), i) if i > 1 => format!("{:.2}", faster(reaches, one)),
+            let p = match one {
+                Some(one) if islands > 1 => format!("{:.2}", faster(reaches, one)),
                 _ => "–".to_string(),
             };
             println!(
@@ -178,10 +178,14 @@ fn main() {
             markers: true,
         });
     }
+    let most = runs
+        .iter()
+        .map(|r| f64::from(r.islands).log2())
+        .fold(0.0, f64::max);
     series.push(Series {
         label: "one island".into(),
         colour: [150, 150, 150],
-        points: vec![[0.0, 1.0], [4.0, 1.0]],
+        points: vec![[0.0, 1.0], [most, 1.0]],
         markers: false,
     });
     if let Some(png) = args.get(1) {
