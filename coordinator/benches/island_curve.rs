@@ -8,19 +8,34 @@
 //! The CSV holds one row per run, `target,islands,population,seed,evaluations,session`, where
 //! `evaluations` is the count at which the run first reached the paper's value, or `>N` for a run
 //! stopped short after N. Prints one Markdown row per target and island count (runs, median,
-//! quartiles, and P: the probability that a run of that count reaches the paper's value before a
-//! one-island run, ties counting half) and draws the medians, one line per target, each divided
-//! by its target's one-island median.
+//! quartiles, P: the probability that a run of that count reaches the paper's value before a
+//! one-island run, ties counting half, and the median's ratio to one island's with its 90 %
+//! bootstrap interval) and draws the ratios, one line per target, with their intervals as bars.
 //!
 //! A stopped run counts as later than any finished one, so a median or quartile that falls on one
 //! is "beyond" the budget, whatever the budget was. One island is every one-island run of the
 //! target, population 48 and 50 together: the same search from two more or fewer random designs
 //! (session 26 found the two samples' medians 1.8–2.3 times apart, both ways, so neither alone is
 //! the baseline).
+//!
+//! The interval answers how far a median ratio could move with other seeds: both samples are
+//! redrawn with replacement ([`RESAMPLES`] times, from a fixed seed, so the table is reproducible
+//! to the byte), and the 5th and 95th percentiles of the redrawn ratios bound it. A percentile
+//! bootstrap of a median is coarse for a handful of runs (with three runs it can only take the
+//! runs' own values), which is the point: it shows which verdicts three or seven seeds can carry.
 
 use std::collections::BTreeMap;
 
 use amorph::export::{PlotSpec, Series, line_plot_over};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Redraws per interval: enough that the 5th percentile's rank, 500, moves its value by less
+/// than the table's two decimals between seeds of the bootstrap itself.
+const RESAMPLES: usize = 10_000;
+
+/// Intervals drawn above this ratio are cut there (a stopped run's ratio is unbounded).
+const BAR_CEILING: f64 = 2.5;
 
 /// Evaluations to the paper's value; `None` for a run stopped short of it.
 type Reach = Option<u64>;
@@ -93,6 +108,27 @@ fn quartile(sorted: &[Reach], f: f64) -> Option<f64> {
     sorted[rank].map(|v| v as f64)
 }
 
+/// The 90 % percentile-bootstrap interval of median(a) / median(b), a stopped run counting as
+/// infinitely late (so an interval can end at infinity).
+fn ratio_interval(a: &[Reach], b: &[Reach], rng: &mut ChaCha8Rng) -> [f64; 2] {
+    let value = |r: &Reach| r.map_or(f64::INFINITY, |v| v as f64);
+    let mut redraw = |sample: &[Reach], scratch: &mut Vec<f64>| {
+        scratch.clear();
+        scratch
+            .extend((0..sample.len()).map(|_| value(&sample[rng.random_range(0..sample.len())])));
+        scratch.sort_by(f64::total_cmp);
+        let n = scratch.len();
+        0.5 * (scratch[(n - 1) / 2] + scratch[n / 2])
+    };
+    let (mut sa, mut sb) = (Vec::new(), Vec::new());
+    let mut ratios: Vec<f64> = (0..RESAMPLES)
+        .map(|_| redraw(a, &mut sa) / redraw(b, &mut sb))
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    let at = |f: f64| ratios[(f * (RESAMPLES - 1) as f64).round() as usize];
+    [at(0.05), at(0.95)]
+}
+
 /// P(a run of `a` reaches the value before a run of `b`), ties half; two stopped runs tie.
 fn faster(a: &[Reach], b: &[Reach]) -> f64 {
     let wins: f64 = a
@@ -140,9 +176,12 @@ fn main() {
             .push(run.reach);
     }
     let show = |v: Option<f64>| v.map_or("beyond".to_string(), |v| format!("{v:.0}"));
-    println!("| target | islands | runs | median | quartiles | P(faster than one island) |");
-    println!("|---|---|---|---|---|---|");
-    let mut series = Vec::new();
+    println!(
+        "| target | islands | runs | median | quartiles | P(faster than one island) | median ÷ one island's (90 % interval) |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    let (mut series, mut bars) = (Vec::new(), Vec::new());
     for (k, (target, counts)) in by_target.iter_mut().enumerate() {
         for reaches in counts.values_mut() {
             reaches.sort_by_key(late);
@@ -151,29 +190,51 @@ fn main() {
         // Each target against its own one-island median, so that four targets of different
         // difficulty share one axis and "not worse than one island" is the line at 1.
         let scale = one.and_then(|one| median(one)).unwrap_or(f64::NAN);
+        let colour = COLOURS[k % COLOURS.len()];
+        // Targets side by side at each island count, so that their bars do not hide each other.
+        let shift = 0.06 * (k as f64 - 1.5);
         let mut points = Vec::new();
         for (&islands, reaches) in counts.iter() {
             let median = median(reaches);
-            let p = match one {
-                Some(one) if islands > 1 => format!("{:.2}", faster(reaches, one)),
-                _ => "–".to_string(),
+            // log2 on a linear axis: a decade axis would run on to 100 islands.
+            let x = f64::from(islands).log2() + shift;
+            let (p, ratio) = match one {
+                Some(one) if islands > 1 => {
+                    let [lo, hi] = ratio_interval(reaches, one, &mut rng);
+                    bars.push(Series {
+                        label: String::new(),
+                        colour,
+                        points: vec![[x, lo.min(BAR_CEILING)], [x, hi.min(BAR_CEILING)]],
+                        markers: false,
+                    });
+                    let ratio =
+                        median.map_or("beyond".to_string(), |m| format!("{:.2}", m / scale));
+                    let end = |v: f64| {
+                        if v.is_finite() {
+                            format!("{v:.2}")
+                        } else {
+                            "beyond".into()
+                        }
+                    };
+                    (
+                        format!("{:.2}", faster(reaches, one)),
+                        format!("{ratio} ({}–{})", end(lo), end(hi)),
+                    )
+                }
+                _ => ("–".to_string(), "–".to_string()),
             };
             println!(
-                "| {target} | {islands} | {} | {} | {}–{} | {p} |",
+                "| {target} | {islands} | {} | {} | {}–{} | {p} | {ratio} |",
                 reaches.len(),
                 show(median),
                 show(quartile(reaches, 0.25)),
                 show(quartile(reaches, 0.75)),
             );
-            // log2 on a linear axis: a decade axis would run on to 100 islands.
-            points.push([
-                f64::from(islands).log2(),
-                median.unwrap_or(f64::NAN) / scale,
-            ]);
+            points.push([x, median.unwrap_or(f64::NAN) / scale]);
         }
         series.push(Series {
             label: target.replace('_', " "),
-            colour: COLOURS[k % COLOURS.len()],
+            colour,
             points,
             markers: true,
         });
@@ -188,15 +249,18 @@ fn main() {
         points: vec![[0.0, 1.0], [most, 1.0]],
         markers: false,
     });
+    series.extend(bars);
     if let Some(png) = args.get(1) {
         let spec = PlotSpec {
-            title: "Islands at an equal total of 48 designs".into(),
+            title: format!("Islands at an equal total of 48 designs (bars cut at {BAR_CEILING})"),
             x_label: "islands, log2 (0: one island, 4: sixteen)".into(),
-            y_label: "median evaluations to Table III value, relative to one island".into(),
+            y_label:
+                "median evaluations to the paper value / one island median (bars: 90 % interval)"
+                    .into(),
             log_x: false,
             log_y: false,
         };
-        let bytes = line_plot_over(&spec, &series, [None, Some((0.4, 1.6))])
+        let bytes = line_plot_over(&spec, &series, [None, Some((0.4, BAR_CEILING))])
             .to_png()
             .unwrap_or_else(|e| panic!("PNG encoding: {e}"));
         std::fs::write(png, bytes).unwrap_or_else(|e| {

@@ -135,7 +135,8 @@ pub fn line_plot_over(
     );
     text(&mut image, &spec.y_label, 10.0, TOP - 26.0, INK);
 
-    for (i, s) in series.iter().enumerate() {
+    let mut legend_rows = 0;
+    for s in series {
         let pts: Vec<[f64; 2]> = s
             .points
             .iter()
@@ -150,8 +151,13 @@ pub fn line_plot_over(
                 square(&mut image, *p, 3.0, s.colour);
             }
         }
-        // Legend, top right, one row per series.
-        let y = TOP + 8.0 + 20.0 * i as f64;
+        // Legend, top right, one row per labelled series (an unlabelled one, e.g. an error bar,
+        // belongs to a labelled one of its colour).
+        if s.label.is_empty() {
+            continue;
+        }
+        let y = TOP + 8.0 + 20.0 * legend_rows as f64;
+        legend_rows += 1;
         let x = LEFT + pw - 16.0 - text_width(&s.label) - 30.0;
         line(&mut image, [x, y + 7.0], [x + 22.0, y + 7.0], s.colour, 3);
         text(&mut image, &s.label, x + 30.0, y, INK);
@@ -344,6 +350,35 @@ fn glyph(c: char) -> [u8; 7] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An unlabelled series (an error bar) is drawn but takes no legend row: the labelled line's
+    /// legend stays in the first row whether the bar is drawn before or after it, and labelling
+    /// the bar adds a row.
+    #[test]
+    fn an_unlabelled_series_has_no_legend_row() {
+        let spec = PlotSpec {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            log_x: false,
+            log_y: false,
+        };
+        // The line along the bottom and the bar at the left edge touch neither each other nor
+        // the legend (top right).
+        let series = |label: &str, points: Vec<[f64; 2]>| Series {
+            label: label.into(),
+            colour: [200, 0, 0],
+            points,
+            markers: true,
+        };
+        let line = series("a", vec![[0.0, 0.0], [1.0, 0.1]]);
+        let bar = |label: &str| series(label, vec![[0.0, 0.5], [0.0, 1.0]]);
+        let after = line_plot(&spec, &[line.clone(), bar("")]);
+        let before = line_plot(&spec, &[bar(""), line.clone()]);
+        assert!(after.pixels == before.pixels);
+        let labelled = line_plot(&spec, &[line, bar("b")]);
+        assert!(after.pixels != labelled.pixels);
+    }
 
     /// Issue 12, item 1: a profile station at x = -1.7e308 (finite, so a peer could send it)
     /// made the tick code allocate without bound. Any finite data must plot.
