@@ -2,8 +2,8 @@
 # Checks the cluster recipes beyond one machine, as far as this machine allows (run by .ci/run):
 # - the Kubernetes manifests validate against the Kubernetes API schemas (kubernetes-validate from
 #   PyPI, installed into a virtualenv under target/), and a broken manifest is caught;
-# - the shell scripts, including the Slurm batch script, parse; study.sh --set edits a config, and
-#   study.sh summary ranks settings.
+# - the shell scripts, including the Slurm batch script, parse; study.sh --set edits a config,
+#   study.sh resume finishes the runs a stop cut short, and study.sh summary ranks settings.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -47,6 +47,24 @@ if COORDINATOR="$study/coordinator" deploy/study.sh run "$study/out" configs/cir
   echo "check-recipes: study.sh accepted --set without a section" >&2
   exit 1
 fi
+# study.sh resume (how a study cut short, here or on a lent machine, is finished): a finished run is
+# left alone, a run with a store continues it, one without starts again, and each config is pointed
+# at the study's folder, wherever the study was made.
+mkdir -p "$study/res/configs" "$study/res/r-s1" "$study/res/r-s2"
+for seed in 1 2 3; do printf 'name = "r-s%s"\nseed = %s\nresults_dir = "/elsewhere"\n' $seed $seed > "$study/res/configs/r-s$seed.toml"; done
+echo '{}' > "$study/res/r-s1/summary.json"
+: > "$study/res/r-s2/run.sqlite"
+printf '#!/bin/sh\necho "$* $(grep results_dir "$2")" >> "%s/calls"\n' "$study" > "$study/record"
+chmod +x "$study/record"
+COORDINATOR="$study/record" deploy/study.sh resume "$study/res" --jobs 2 2>/dev/null
+got=$(sort "$study/calls")
+res=$(cd "$study/res" && pwd)
+want="--config $study/res/configs/r-s2.toml --local-workers 1 --resume results_dir = \"$res\"
+--config $study/res/configs/r-s3.toml --local-workers 1 --fresh results_dir = \"$res\""
+if [ "$got" != "$want" ]; then
+  printf 'check-recipes: study.sh resume ran\n%s\nexpected\n%s\n' "$got" "$want" >&2
+  exit 1
+fi
 # study.sh summary (the docs' island curves rely on it): two settings of two runs each, one run
 # stopped short of the paper's value, which counts as later than any run that reached it.
 fake_run() { # <name> <seed> <evaluations at which the paper's 0.10 % was reached, or "never">
@@ -68,4 +86,4 @@ if [ "$got" != "$want" ]; then
   printf 'check-recipes: study.sh summary printed\n%s\nexpected\n%s\n' "$got" "$want" >&2
   exit 1
 fi
-echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs, study.sh summary ranks settings"
+echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs, study.sh resume finishes what a stop cut short, study.sh summary ranks settings"

@@ -4,6 +4,7 @@
 #
 #   deploy/study.sh run <out> <config.toml> [--extra <snippet.toml>] [--set <section.key=value>]...
 #                       [--target <rms %>] [--label <l>] <seed>...
+#   deploy/study.sh resume <out> [--jobs <n>]
 #   deploy/study.sh table <out> [<out>...]
 #   deploy/study.sh summary <out> [<out>...]
 #
@@ -12,7 +13,11 @@
 # e.g. `[search.local_search]`), replaces each `--set` key in its section (`--set scene.target=straight
 # --set search.islands=16`: a value that is not TOML is taken as a string; a missing key or section
 # is added), sets `budget.target_rms_percent`, and runs the seeds one after
-# another; start two `run`s to use two cores. `table` prints one markdown row per run from its
+# another; start two `run`s to use two cores. `resume` finishes every run of <out> that a stop cut
+# short (one without summary.json), <n> at a time: it points the run's config at <out> (so a study
+# copied from another machine or folder resumes where it now lies), then continues the run from its
+# store with `--resume`, the bits it would have had uninterrupted, or starts it again if it stopped
+# before writing one. `table` prints one markdown row per run from its
 # config.toml, summary.json and history.csv: the best RMS error at the final resolution, and the
 # evaluations at which the run first reached the paper's simulated error (Table III) and half of it,
 # and the count at the final level's first epoch (how many of them the coarser levels took).
@@ -24,7 +29,7 @@
 set -euo pipefail
 
 usage() {
-    sed -n '4,8p' "$0" | sed 's/^# *//' >&2
+    sed -n '4,9p' "$0" | sed 's/^# *//' >&2
     exit 2
 }
 
@@ -72,6 +77,40 @@ run() {
             echo "study: $name failed, see $out/logs/$name.log" >&2
         echo "study: $name ended $(date -Is), load $(cut -d' ' -f1-3 /proc/loadavg)" >&2
     done
+}
+
+resume() {
+    local out=$1 jobs=1
+    shift
+    while [[ $# -gt 0 ]]; do
+        case $1 in
+        --jobs) jobs=$2 ;;
+        *) usage ;;
+        esac
+        shift 2
+    done
+    [[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "study: --jobs $jobs: expected a positive count" >&2; exit 2; }
+    local bin=${COORDINATOR:-target/release/coordinator}
+    [[ -x $bin ]] || { echo "study: no coordinator binary at $bin (cargo build --release)" >&2; exit 1; }
+    [[ -d $out/configs ]] || { echo "study: $out/configs: no study there" >&2; exit 1; }
+    local here file name mode
+    here=$(cd "$out" && pwd)
+    mkdir -p "$out/logs"
+    for file in "$out"/configs/*.toml; do
+        name=$(basename "$file" .toml)
+        [[ -f $out/$name/summary.json ]] && continue
+        sed -i -E "s|^results_dir[[:space:]]*=.*|results_dir = \"$here\"|" "$file"
+        mode=--fresh
+        [[ -f $out/$name/run.sqlite ]] && mode=--resume
+        while [[ $(jobs -rp | wc -l) -ge $jobs ]]; do wait -n || true; done
+        (
+            echo "study: $name $mode $(date -Is), load $(cut -d' ' -f1-3 /proc/loadavg)" >&2
+            "$bin" --config "$file" --local-workers 1 "$mode" >>"$out/logs/$name.log" 2>&1 ||
+                echo "study: $name failed, see $out/logs/$name.log" >&2
+            echo "study: $name ended $(date -Is)" >&2
+        ) &
+    done
+    wait
 }
 
 # Rewrites `key = …` inside `[section]` of a config in place, for each `section.key=value`; the
@@ -205,6 +244,11 @@ run)
     shift
     [[ $# -ge 3 ]] || usage
     run "$@"
+    ;;
+resume)
+    shift
+    [[ $# -ge 1 ]] || usage
+    resume "$@"
     ;;
 table | summary)
     [[ $# -ge 2 ]] || usage

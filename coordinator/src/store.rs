@@ -50,7 +50,7 @@ pub enum StoreError {
     #[error("run store {0} does not exist: nothing to resume (run without --resume)")]
     Missing(PathBuf),
     #[error(
-        "run store {path} was made by a different config ({differs} differs); only [budget] and [cluster] may change on --resume"
+        "run store {path} was made by a different config ({differs} differs); only [budget], [cluster] and results_dir may change on --resume"
     )]
     ConfigChanged { path: PathBuf, differs: String },
     #[error("run store {path}: {message}")]
@@ -704,9 +704,11 @@ fn config_text(config: &RunConfig) -> String {
 }
 
 /// The first key (dotted) whose value differs between two configs, ignoring `budget` (a run may
-/// be extended) and `cluster` (how workers connect never changes a result).
+/// be extended), `cluster` (how workers connect never changes a result) and `results_dir` (a
+/// stopped run's folder may be moved, e.g. from a lent machine to the one that finishes it: the
+/// store is found through the new path, so nothing of the old one is read).
 fn first_difference(a: &toml::Table, b: &toml::Table) -> Option<String> {
-    first_difference_except(a, b, &["budget", "cluster"])
+    first_difference_except(a, b, &["budget", "cluster", "results_dir"])
 }
 
 /// The first key (dotted, in sorted order) whose value differs, skipping top-level `ignored` keys.

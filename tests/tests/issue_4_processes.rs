@@ -46,28 +46,26 @@ fn wait_for_store(path: &Path, n: u64, child: &mut Child) {
     }
 }
 
-#[test]
-fn a_killed_coordinator_resumes_from_its_store_and_ends_bit_identical() {
-    let reference_dir = scratch_dir("resume-reference");
-    run_locally(&small_beam_config(&reference_dir, EVALUATIONS, SEED), 2);
-    let expected = std::fs::read(reference_dir.join("small/population.json")).unwrap();
-
-    let dir = scratch_dir("resume");
-    let config = config_file(&dir, 2);
-    let store = dir.join("small/run.sqlite");
+/// Runs the coordinator on `config` and SIGKILLs it once half the evaluations are in `store`
+/// (no chance to tidy up); returns when it was killed (Unix seconds) and what the store held.
+fn kill_half_way(config: &Path, store: &Path) -> (f64, u64) {
     let mut first = Command::new(binary("coordinator"))
         .args(["--config", config.to_str().unwrap()])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    wait_for_store(&store, EVALUATIONS / 2, &mut first);
-    first.kill().unwrap(); // SIGKILL: no chance to tidy up
+    wait_for_store(store, EVALUATIONS / 2, &mut first);
+    first.kill().unwrap();
     first.wait().unwrap();
     let killed_at = now_unix();
-    let stored = RunStore::peek_evaluation_count(&store).unwrap();
+    let stored = RunStore::peek_evaluation_count(store).unwrap();
     assert!(stored < EVALUATIONS, "killed mid-run ({stored} stored)");
+    (killed_at, stored)
+}
 
+/// `coordinator --resume` on `config` finishes the run with the uninterrupted run's population.
+fn resume_to_the_end(config: &Path, population: &Path, expected: &[u8]) {
     let out = Command::new(binary("coordinator"))
         .args(["--config", config.to_str().unwrap(), "--resume"])
         .output()
@@ -82,11 +80,27 @@ fn a_killed_coordinator_resumes_from_its_store_and_ends_bit_identical() {
         "{}",
         String::from_utf8_lossy(&out.stdout)
     );
-    let resumed = std::fs::read(dir.join("small/population.json")).unwrap();
+    let resumed = std::fs::read(population).unwrap();
     assert!(
         resumed == expected,
         "resumed run differs from the uninterrupted one"
     );
+}
+
+fn uninterrupted_population(name: &str) -> Vec<u8> {
+    let reference_dir = scratch_dir(name);
+    run_locally(&small_beam_config(&reference_dir, EVALUATIONS, SEED), 2);
+    std::fs::read(reference_dir.join("small/population.json")).unwrap()
+}
+
+#[test]
+fn a_killed_coordinator_resumes_from_its_store_and_ends_bit_identical() {
+    let expected = uninterrupted_population("resume-reference");
+    let dir = scratch_dir("resume");
+    let config = config_file(&dir, 2);
+    let store = dir.join("small/run.sqlite");
+    let (killed_at, stored) = kill_half_way(&config, &store);
+    resume_to_the_end(&config, &dir.join("small/population.json"), &expected);
 
     // Every task is stored once, and nothing finished before the kill was evaluated again.
     let conn = rusqlite_count(&store, "SELECT COUNT(*) FROM evaluation");
@@ -98,6 +112,24 @@ fn a_killed_coordinator_resumes_from_its_store_and_ends_bit_identical() {
     assert_eq!(
         before, stored,
         "evaluations from before the kill were kept, not redone"
+    );
+}
+
+/// A killed run's folder moved elsewhere (a study cut short on a lent machine and finished on
+/// another, docs/evolution.md session 29) resumes there under a config that names the new
+/// `results_dir`, and ends as the uninterrupted run.
+#[test]
+fn a_killed_run_moved_to_another_results_dir_resumes_bit_identical() {
+    let expected = uninterrupted_population("moved-reference");
+    let from = scratch_dir("moved-from");
+    kill_half_way(&config_file(&from, 2), &from.join("small/run.sqlite"));
+    let to = scratch_dir("moved-to");
+    std::fs::rename(from.join("small"), to.join("small")).unwrap();
+    let config = config_file(&to, 2);
+    resume_to_the_end(&config, &to.join("small/population.json"), &expected);
+    assert!(
+        !from.join("small").exists(),
+        "nothing was written to the old place"
     );
 }
 
