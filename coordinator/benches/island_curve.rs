@@ -251,9 +251,8 @@ fn main() {
         let spec = PlotSpec {
             title: format!("Islands at an equal total of 48 designs (bars cut at {BAR_CEILING})"),
             x_label: "islands, log2 (0: one island, 4: sixteen)".into(),
-            y_label:
-                "median evaluations to the paper value / one island median (bars: 90 % interval)"
-                    .into(),
+            // Drawn across the top and clipped beyond ~75 characters; the font has no apostrophe.
+            y_label: "evaluations to paper value: median / one-island median (bars: 90 %)".into(),
             log_x: false,
             log_y: false,
         };
