@@ -33,6 +33,13 @@ usage() {
     exit 2
 }
 
+# The coordinator binary the runs use, or a stop naming the one that is missing.
+coordinator() {
+    local bin=${COORDINATOR:-target/release/coordinator}
+    [[ -x $bin ]] || { echo "study: no coordinator binary at $bin (cargo build --release)" >&2; exit 1; }
+    echo "$bin"
+}
+
 run() {
     local out=$1 config=$2
     shift 2
@@ -49,8 +56,8 @@ run() {
         shift 2
     done
     [[ $# -gt 0 ]] || usage
-    local bin=${COORDINATOR:-target/release/coordinator}
-    [[ -x $bin ]] || { echo "study: no coordinator binary at $bin (cargo build --release)" >&2; exit 1; }
+    local bin
+    bin=$(coordinator)
     mkdir -p "$out/configs" "$out/logs"
     for seed in "$@"; do
         local name="$label-s$seed" file="$out/configs/$label-s$seed.toml"
@@ -90,8 +97,8 @@ resume() {
         shift 2
     done
     [[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "study: --jobs $jobs: expected a positive count" >&2; exit 2; }
-    local bin=${COORDINATOR:-target/release/coordinator}
-    [[ -x $bin ]] || { echo "study: no coordinator binary at $bin (cargo build --release)" >&2; exit 1; }
+    local bin
+    bin=$(coordinator)
     [[ -d $out/configs ]] || { echo "study: $out/configs: no study there" >&2; exit 1; }
     local here file name mode
     here=$(cd "$out" && pwd)

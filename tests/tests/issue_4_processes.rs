@@ -87,20 +87,24 @@ fn resume_to_the_end(config: &Path, population: &Path, expected: &[u8]) {
     );
 }
 
-fn uninterrupted_population(name: &str) -> Vec<u8> {
-    let reference_dir = scratch_dir(name);
-    run_locally(&small_beam_config(&reference_dir, EVALUATIONS, SEED), 2);
-    std::fs::read(reference_dir.join("small/population.json")).unwrap()
+/// The uninterrupted run's `population.json`, run once for every test that compares with it.
+fn uninterrupted_population() -> &'static [u8] {
+    static POPULATION: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    POPULATION.get_or_init(|| {
+        let reference_dir = scratch_dir("resume-reference");
+        run_locally(&small_beam_config(&reference_dir, EVALUATIONS, SEED), 2);
+        std::fs::read(reference_dir.join("small/population.json")).unwrap()
+    })
 }
 
 #[test]
 fn a_killed_coordinator_resumes_from_its_store_and_ends_bit_identical() {
-    let expected = uninterrupted_population("resume-reference");
+    let expected = uninterrupted_population();
     let dir = scratch_dir("resume");
     let config = config_file(&dir, 2);
     let store = dir.join("small/run.sqlite");
     let (killed_at, stored) = kill_half_way(&config, &store);
-    resume_to_the_end(&config, &dir.join("small/population.json"), &expected);
+    resume_to_the_end(&config, &dir.join("small/population.json"), expected);
 
     // Every task is stored once, and nothing finished before the kill was evaluated again.
     let conn = rusqlite_count(&store, "SELECT COUNT(*) FROM evaluation");
@@ -120,13 +124,13 @@ fn a_killed_coordinator_resumes_from_its_store_and_ends_bit_identical() {
 /// `results_dir`, and ends as the uninterrupted run.
 #[test]
 fn a_killed_run_moved_to_another_results_dir_resumes_bit_identical() {
-    let expected = uninterrupted_population("moved-reference");
+    let expected = uninterrupted_population();
     let from = scratch_dir("moved-from");
     kill_half_way(&config_file(&from, 2), &from.join("small/run.sqlite"));
     let to = scratch_dir("moved-to");
     std::fs::rename(from.join("small"), to.join("small")).unwrap();
     let config = config_file(&to, 2);
-    resume_to_the_end(&config, &to.join("small/population.json"), &expected);
+    resume_to_the_end(&config, &to.join("small/population.json"), expected);
     assert!(
         !from.join("small").exists(),
         "nothing was written to the old place"
