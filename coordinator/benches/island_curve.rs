@@ -20,7 +20,10 @@
 //!
 //! The interval answers how far a median ratio could move with other seeds: both samples are
 //! redrawn with replacement ([`RESAMPLES`] times, from a fixed seed, so the table is reproducible
-//! to the byte), and the 5th and 95th percentiles of the redrawn ratios bound it. A percentile
+//! to the byte), and the 5th and 95th percentiles of the redrawn ratios bound it. Each cell draws
+//! from its own random stream, named by its target and island count ([`cell_rng`]), so its interval
+//! moves only when its own runs or its target's one-island runs change, not when another cell
+//! gains rows. A percentile
 //! bootstrap of a median is coarse for a handful of runs (with three runs it can only take the
 //! runs' own values), which is the point: it shows which verdicts three or seven seeds can carry.
 
@@ -32,8 +35,10 @@ use rand_chacha::ChaCha8Rng;
 
 /// Redraws per interval. A redrawn median can take only a few values for a handful of runs, so
 /// an interval's ends jump between them with the bootstrap's own seed, and more redraws do not
-/// smooth that: seeds 13 and 14 give ends up to 0.05 apart (the upper end for eight islands on
-/// the straight: 0.89 and 0.94); read an end to a tenth.
+/// smooth that: in session 28, with one stream for the whole table, seeds 13 and 14 gave ends up
+/// to 0.05 apart (the upper end for eight islands on the straight: 0.89 and 0.94), and the
+/// streams per cell moved ends by up to 0.04 (0.09 for cells of three runs); read an end to a
+/// tenth.
 const RESAMPLES: usize = 10_000;
 
 /// Intervals drawn above this ratio are cut there (a stopped run's ratio is unbounded).
@@ -110,6 +115,21 @@ fn quartile(sorted: &[Reach], f: f64) -> Option<f64> {
     sorted[rank].map(|v| v as f64)
 }
 
+/// The bootstrap's random stream for one cell of the table: the same seed for every cell, and a
+/// stream number hashed (FNV-1a) from the target's name and the island count, so that a cell's
+/// draws do not depend on which cells come before it.
+fn cell_rng(target: &str, islands: u32) -> ChaCha8Rng {
+    let stream = target
+        .bytes()
+        .chain(islands.to_le_bytes())
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+        });
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    rng.set_stream(stream);
+    rng
+}
+
 /// The 90 % percentile-bootstrap interval of median(a) / median(b), a stopped run counting as
 /// infinitely late (so an interval can end at infinity).
 fn ratio_interval(a: &[Reach], b: &[Reach], rng: &mut ChaCha8Rng) -> [f64; 2] {
@@ -180,7 +200,6 @@ fn main() {
         "| target | islands | runs | median | quartiles | P(faster than one island) | median ÷ one island's (90 % interval) |"
     );
     println!("|---|---|---|---|---|---|---|");
-    let mut rng = ChaCha8Rng::seed_from_u64(13);
     let (mut series, mut bars) = (Vec::new(), Vec::new());
     for (k, (target, counts)) in by_target.iter_mut().enumerate() {
         for reaches in counts.values_mut() {
@@ -200,7 +219,7 @@ fn main() {
             let x = f64::from(islands).log2() + shift;
             let (p, ratio) = match one {
                 Some(one) if islands > 1 => {
-                    let [lo, hi] = ratio_interval(reaches, one, &mut rng);
+                    let [lo, hi] = ratio_interval(reaches, one, &mut cell_rng(target, islands));
                     bars.push(Series {
                         label: String::new(),
                         colour,
