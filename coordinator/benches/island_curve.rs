@@ -21,11 +21,11 @@
 //! The interval answers how far a median ratio could move with other seeds: both samples are
 //! redrawn with replacement ([`RESAMPLES`] times, from a fixed seed, so the table is reproducible
 //! to the byte), and the 5th and 95th percentiles of the redrawn ratios bound it. Each cell draws
-//! from its own random stream, named by its target and island count ([`cell_rng`]), so its interval
-//! moves only when its own runs or its target's one-island runs change, not when another cell
-//! gains rows. A percentile
-//! bootstrap of a median is coarse for a handful of runs (with three runs it can only take the
-//! runs' own values), which is the point: it shows which verdicts three or seven seeds can carry.
+//! from its own random stream, named by its target and island count ([`cell_rng`]), so its
+//! interval moves only when its own runs or its target's one-island runs change, not when another
+//! cell gains rows. A percentile bootstrap of a median is coarse for a handful of runs (with three
+//! runs it can only take the runs' own values), which is the point: it shows which verdicts three
+//! or seven seeds can carry.
 
 use std::collections::BTreeMap;
 
