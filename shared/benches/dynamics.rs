@@ -9,11 +9,15 @@
 //!   repetitions, robust to a machine shared with other jobs (use it for before/after tables);
 //! - `study`: the error-against-run-time study: CSV and a PNG plot under
 //!   `$CARGO_TARGET_DIR/dynamics-study/` (or `target/dynamics-study/`).
+//!
+//! With `mixed` among the arguments every scene of the `min`, `threads` and `eval` modes runs the
+//! mixed-precision link kernel (`LinkPrecision::Mixed`) instead of the double one.
 
 use std::hint::black_box;
+use std::sync::OnceLock;
 use std::time::Instant;
 
-use amorph::dynamics::{DynamicScene, Pass, Simulation, foam_palette};
+use amorph::dynamics::{DynamicScene, LinkPrecision, Pass, Simulation, foam_palette};
 use amorph::genome::{GenomeLimits, random_genome};
 use amorph::material::{Material, MaterialId, Palette};
 use amorph::task::locomotion::{LocomotionProtocol, SettleRule, simulate_locomotion};
@@ -21,6 +25,13 @@ use amorph::voxel::{DEFAULT_THRESHOLD, GridDims, VoxelGrid, keep_largest_compone
 use criterion::{Criterion, Throughput};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+
+/// The link kernel's precision for every scene of the extra modes (`mixed` among the arguments).
+static PRECISION: OnceLock<LinkPrecision> = OnceLock::new();
+
+fn precision() -> LinkPrecision {
+    PRECISION.get().copied().unwrap_or_default()
+}
 
 /// The issue's speed scene: an N³ block on the floor with gravity, friction 1.0/0.3, voxels with
 /// x < N/2 actuated ±20 % at a 0.5 s period, s = 0.01 m, E = 1 MPa, ν = 0.35, ρ = 1000.
@@ -52,6 +63,7 @@ fn speed_block_with(n: usize, poisson: bool) -> Simulation {
             phase: 0.0,
         }),
         poisson,
+        link_precision: precision(),
         ..DynamicScene::paper_locomotion()
     };
     let mut sim = Simulation::new(&grid, &Palette(vec![passive, active]), &scene).unwrap();
@@ -239,7 +251,10 @@ fn paper_evaluation(threads: Option<usize>, only: Option<&str>) {
         if only.is_some_and(|o| o != name) {
             continue;
         }
-        let scene = DynamicScene::paper_locomotion();
+        let scene = DynamicScene {
+            link_precision: precision(),
+            ..DynamicScene::paper_locomotion()
+        };
         let start = Instant::now();
         let protocol = LocomotionProtocol::default();
         let outcome = in_pool(threads, || {
@@ -247,10 +262,11 @@ fn paper_evaluation(threads: Option<usize>, only: Option<&str>) {
         });
         let wall = start.elapsed().as_secs_f64();
         println!(
-            "paper-style evaluation ({} threads), {name} robot: {} voxels, {} steps ({:.3} s simulated, settled \
+            "paper-style evaluation ({} threads, {:?} kernel), {name} robot: {} voxels, {} steps ({:.3} s simulated, settled \
              after {:.3} s, dt {:.3e} s), {:.1} s wall, {:.3e} voxel-steps/s, status {:?}, \
              gait {:.3} %/cycle (bits {:016x})",
             threads.map_or("alone".to_string(), |n| n.to_string()),
+            precision(),
             outcome.voxel_count,
             outcome.steps,
             outcome.simulated_time,
@@ -267,6 +283,9 @@ fn paper_evaluation(threads: Option<usize>, only: Option<&str>) {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "mixed") {
+        PRECISION.set(LinkPrecision::Mixed).ok();
+    }
     if args.iter().any(|a| a == "study") {
         study();
         return;

@@ -17,10 +17,13 @@
 //! ratio LINK_ZETA and the time-step fraction DT_FRACTION (the explicit link damping bounds the
 //! step: docs/dynamics.md, "Open points"). `FIRST_SEED=k` starts the robots at seed k (seed 13
 //! at 10³ is the one random robot that walks, ~10 mm in 10 cycles).
+//!
+//! `cargo bench -p amorph --bench settle -- mixed N ROBOTS` compares the mixed-precision link
+//! kernel instead: the candidate is the reference with `LinkPrecision::Mixed`.
 
 use std::time::Instant;
 
-use amorph::dynamics::{DynamicScene, foam_palette};
+use amorph::dynamics::{DynamicScene, LinkPrecision, foam_palette};
 use amorph::genome::{GenomeLimits, random_genome};
 use amorph::task::locomotion::{LocomotionOutcome, LocomotionProtocol, simulate_locomotion};
 use amorph::voxel::{DEFAULT_THRESHOLD, GridDims, VoxelGrid, keep_largest_component, voxelize};
@@ -34,12 +37,14 @@ fn robot(seed: u64, n: usize) -> VoxelGrid {
     keep_largest_component(&grid)
 }
 
-/// One way of evaluating: its name, settle damping, link damping ratio and time-step fraction.
-type Case = (&'static str, Option<f64>, f64, f64);
+/// One way of evaluating: its name, settle damping, link damping ratio, time-step fraction and
+/// link kernel.
+type Case = (&'static str, Option<f64>, f64, f64, LinkPrecision);
 
 fn evaluate(grid: &VoxelGrid, n: usize, case: Case) -> (LocomotionOutcome, f64) {
-    let (_, settle_damping, link_zeta, dt_fraction) = case;
+    let (_, settle_damping, link_zeta, dt_fraction, link_precision) = case;
     let mut scene = DynamicScene::paper_locomotion();
+    scene.link_precision = link_precision;
     scene.voxel_size = 0.02 / n as f64;
     scene.dt_fraction = dt_fraction;
     scene.damping.link = link_zeta;
@@ -61,6 +66,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     let step_mode = std::env::args().any(|a| a == "step");
+    let mixed_mode = std::env::args().any(|a| a == "mixed");
+    let double = LinkPrecision::Double;
     let args: Vec<f64> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
@@ -69,13 +76,17 @@ fn main() {
     let robots = args.get(1).map_or(20, |&a| a as u64);
     let zeta = args.get(2).copied().unwrap_or(0.1);
     let reference_link = amorph::dynamics::DampingParams::default().link;
-    let candidate: Case = if step_mode {
+    let candidate: Case = if mixed_mode {
+        ("settled", None, reference_link, 1.0, LinkPrecision::Mixed)
+    } else if step_mode {
         let dt_fraction = args.get(3).copied().unwrap_or(1.0);
-        ("settled", None, zeta, dt_fraction)
+        ("settled", None, zeta, dt_fraction, double)
     } else {
-        ("settled", Some(zeta), reference_link, 1.0)
+        ("settled", Some(zeta), reference_link, 1.0, double)
     };
-    let describe = if step_mode {
+    let describe = if mixed_mode {
+        "the mixed-precision link kernel".to_string()
+    } else if step_mode {
         format!(
             "link damping {} at dt_fraction {}",
             candidate.2, candidate.3
@@ -93,9 +104,9 @@ fn main() {
     for seed in first..first + robots {
         let grid = robot(seed, n);
         let cases: [Case; 3] = [
-            ("reference", None, reference_link, 1.0),
+            ("reference", None, reference_link, 1.0, double),
             candidate,
-            ("half_step", None, reference_link, 0.5),
+            ("half_step", None, reference_link, 0.5, double),
         ];
         let mut fitness = Vec::new();
         for (k, case) in cases.into_iter().enumerate() {

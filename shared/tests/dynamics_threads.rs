@@ -1,9 +1,9 @@
 //! Several threads for one simulation (`dynamics::parallel`): a step run inside a thread pool gives
 //! the bits of the same step on one thread, for any number of threads, through a walk on the
 //! floor (friction, actuation, link damping), with the Poisson coupling and self-collision on,
-//! and for a whole locomotion evaluation.
+//! with the mixed-precision link kernel, and for a whole locomotion evaluation.
 
-use amorph::dynamics::{DynamicScene, Simulation, foam_palette};
+use amorph::dynamics::{DynamicScene, LinkPrecision, Simulation, foam_palette};
 use amorph::material::MaterialId;
 use amorph::task::Scene;
 use amorph::task::locomotion::simulate_locomotion;
@@ -114,4 +114,14 @@ fn a_locomotion_evaluation_is_the_same_on_any_number_of_threads() {
         .build()
         .unwrap();
     assert_eq!(pool.install(task), task());
+}
+
+#[test]
+fn threads_give_the_bits_of_one_thread_with_the_mixed_precision_kernel() {
+    let scene = DynamicScene {
+        voxel_size: 0.002,
+        link_precision: LinkPrecision::Mixed,
+        ..DynamicScene::paper_locomotion()
+    };
+    threads_agree(&scene, 1500);
 }

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use amorph::dynamics::FrictionLaw;
+use amorph::dynamics::{FrictionLaw, LinkPrecision};
 use amorph::task::locomotion::LocomotionScene;
 use amorph::task::{Metrics, Scene};
 use amorph_coordinator::RunConfig;
@@ -151,6 +151,51 @@ floor = { incline = 2.0 }
         .unwrap_err()
         .to_string();
     assert!(err.contains("floor.incline"), "{err}");
+}
+
+/// The link kernel's precision is a dynamics key (issue 14): `mixed` reads as the mixed-precision
+/// kernel and what the run writes back reads the same; a value that is not a precision is one
+/// line naming its line; a config without it is the double kernel and writes no such key.
+#[test]
+fn the_link_precision_is_a_dynamics_key() {
+    let mixed = format!(
+        "{SMALL_LOCOMOTION_RUN}{}",
+        "\n[scene.dynamics]\nlink_precision = \"mixed\"\n"
+    );
+    let config = RunConfig::parse(&mixed, Path::new("mixed.toml")).unwrap();
+    let Scene::Locomotion(scene) = &config.raw.scene else {
+        panic!("not a locomotion scene: {:?}", config.raw.scene);
+    };
+    assert_eq!(scene.dynamics.link_precision, LinkPrecision::Mixed);
+    assert!(scene.dynamics.actuation.is_some());
+    let written = toml::to_string(&config.raw).unwrap();
+    let reread = RunConfig::parse(&written, Path::new("config.toml")).unwrap();
+    assert_eq!(reread.raw.scene, config.raw.scene);
+
+    let single = mixed.replace("\"mixed\"", "\"single\"");
+    let line = single
+        .lines()
+        .position(|l| l.starts_with("link_precision"))
+        .unwrap()
+        + 1;
+    let err = RunConfig::parse(&single, Path::new("single.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(&format!("line {line}")) && err.contains("single") && !err.contains('\n'),
+        "{err}"
+    );
+
+    let plain = RunConfig::parse(SMALL_LOCOMOTION_RUN, Path::new("plain.toml")).unwrap();
+    let Scene::Locomotion(scene) = &plain.raw.scene else {
+        panic!("not a locomotion scene");
+    };
+    assert_eq!(scene.dynamics.link_precision, LinkPrecision::Double);
+    assert!(
+        !toml::to_string(&plain.raw)
+            .unwrap()
+            .contains("link_precision")
+    );
 }
 
 /// A config that changes one dynamics key keeps every other key the paper's, the actuation

@@ -9,7 +9,8 @@
 //! another order.
 
 use super::lanes::{
-    Arith, LANES, Lanes, Portable, load_columns3, load_columns4, store_columns4, store_image3,
+    LANES, Lanes, Lanes4, Portable, Regroup, load_columns3, load_columns4, store_columns4,
+    store_image3,
 };
 use super::math::{Quat, Vec3};
 use super::state::Voxels;
@@ -60,13 +61,13 @@ impl IntegrationSummary {
 
 /// [`integrate_part`] as a `pulp` operation, compiled with its instruction set enabled. The state
 /// goes by reference and is moved out inside (see `link::LinkPass`).
-struct Integrate<'a, 'b, A: Arith> {
+struct Integrate<'a, 'b, A: Regroup> {
     arith: A,
     state: &'a mut Option<VoxelState<'b>>,
     dt: f64,
 }
 
-impl<A: Arith> pulp::WithSimd for Integrate<'_, '_, A> {
+impl<A: Regroup> pulp::WithSimd for Integrate<'_, '_, A> {
     type Output = IntegrationSummary;
 
     #[inline(always)]
@@ -159,7 +160,7 @@ impl<'a> VoxelState<'a> {
 }
 
 #[inline(always)]
-fn integrate_lanes<A: Arith>(arith: A, st: VoxelState, dt: f64) -> IntegrationSummary {
+fn integrate_lanes<A: Regroup>(arith: A, st: VoxelState, dt: f64) -> IntegrationSummary {
     let n = st.len();
     // Cut to one length here, inside the vectorized function, so that one check covers every
     // array (the lengths that arrive through `pulp`'s call are unrelated to the optimizer).
@@ -170,7 +171,7 @@ fn integrate_lanes<A: Arith>(arith: A, st: VoxelState, dt: f64) -> IntegrationSu
     let mut max_speed2 = zero;
     let mut checksum = zero;
     let load = |block: &[Vec3]| load_columns3(arith, block);
-    let store = |block: &mut [Vec3], c: [Lanes<A>; 3]| {
+    let store = |block: &mut [Vec3], c: [Lanes4<A>; 3]| {
         store_image3(arith, block, arith.image3([c[0].v, c[1].v, c[2].v]));
     };
     for i0 in (0..whole).step_by(LANES) {

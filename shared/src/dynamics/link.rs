@@ -18,10 +18,11 @@
 //! angular momentum exactly, as a rigid body needs.
 
 use super::lanes::{
-    Arith, LANES, Lanes, Portable, add_image3, load_columns3, load_columns4, load_image3,
-    store_image3,
+    Arith, Element, LANES, Lanes, Portable, Regroup, add_image3, lane_array, load_columns3,
+    load_columns4, load_image3, store_image3,
 };
 use super::math::{Quat, Vec3};
+use super::single::{SINGLE_LANES, Single, SingleCopy};
 use super::state::{Links, Voxels};
 
 /// Per-step inputs of the link pass.
@@ -35,13 +36,44 @@ pub struct LinkStep {
 
 /// A 3-vector per lane.
 #[derive(Clone, Copy)]
-struct V3<A: Arith> {
-    x: Lanes<A>,
-    y: Lanes<A>,
-    z: Lanes<A>,
+pub(super) struct V3<A: Arith<L>, const L: usize> {
+    pub(super) x: Lanes<A, L>,
+    pub(super) y: Lanes<A, L>,
+    pub(super) z: Lanes<A, L>,
 }
 
-impl<A: Arith> V3<A> {
+impl<A: Arith<L>, const L: usize> V3<A, L> {
+    #[inline(always)]
+    pub(super) fn splat(arith: A, x: f64) -> Self {
+        let x = Lanes::splat(arith, x);
+        Self { x, y: x, z: x }
+    }
+
+    #[inline(always)]
+    fn dot(self, o: Self) -> Lanes<A, L> {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Self {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
+
+    #[inline(always)]
+    fn scale(self, s: Lanes<A, L>) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+impl<A: Regroup> V3<A, LANES> {
     /// Lane `j` is `f(j)`.
     #[inline(always)]
     fn gather(arith: A, mut f: impl FnMut(usize) -> Vec3) -> Self {
@@ -51,12 +83,6 @@ impl<A: Arith> V3<A> {
             y: Lanes::from_fn(arith, |j| v[j].y),
             z: Lanes::from_fn(arith, |j| v[j].z),
         }
-    }
-
-    #[inline(always)]
-    fn splat(arith: A, x: f64) -> Self {
-        let x = Lanes::splat(arith, x);
-        Self { x, y: x, z: x }
     }
 
     /// Lane `j` is `block[j]` (a block of [`LANES`] consecutive voxels).
@@ -80,32 +106,9 @@ impl<A: Arith> V3<A> {
         let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
         std::array::from_fn(|j| Vec3::new(x[j], y[j], z[j]))
     }
-
-    #[inline(always)]
-    fn dot(self, o: Self) -> Lanes<A> {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-
-    #[inline(always)]
-    fn cross(self, o: Self) -> Self {
-        Self {
-            x: self.y * o.z - self.z * o.y,
-            y: self.z * o.x - self.x * o.z,
-            z: self.x * o.y - self.y * o.x,
-        }
-    }
-
-    #[inline(always)]
-    fn scale(self, s: Lanes<A>) -> Self {
-        Self {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
 }
 
-impl<A: Arith> std::ops::Add for V3<A> {
+impl<A: Arith<L>, const L: usize> std::ops::Add for V3<A, L> {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -116,7 +119,7 @@ impl<A: Arith> std::ops::Add for V3<A> {
         }
     }
 }
-impl<A: Arith> std::ops::Sub for V3<A> {
+impl<A: Arith<L>, const L: usize> std::ops::Sub for V3<A, L> {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
@@ -130,16 +133,16 @@ impl<A: Arith> std::ops::Sub for V3<A> {
 
 /// A rotation matrix per lane, by columns (see [`super::math::Mat3`]).
 #[derive(Clone, Copy)]
-struct M3<A: Arith> {
-    cx: V3<A>,
-    cy: V3<A>,
-    cz: V3<A>,
+struct M3<A: Arith<L>, const L: usize> {
+    cx: V3<A, L>,
+    cy: V3<A, L>,
+    cz: V3<A, L>,
 }
 
-impl<A: Arith> M3<A> {
+impl<A: Arith<L>, const L: usize> M3<A, L> {
     /// The rotation matrix of `q / |q|` given `s` = 2/|q|² (`q` as w, x, y, z).
     #[inline(always)]
-    fn from_quat(q: [Lanes<A>; 4], s: Lanes<A>) -> Self {
+    fn from_quat(q: [Lanes<A, L>; 4], s: Lanes<A, L>) -> Self {
         let [w, x, y, z] = q;
         let (xx, yy, zz) = (x * x, y * y, z * z);
         let (xy, xz, yz) = (x * y, x * z, y * z);
@@ -165,12 +168,12 @@ impl<A: Arith> M3<A> {
     }
 
     #[inline(always)]
-    fn apply(&self, v: V3<A>) -> V3<A> {
+    fn apply(&self, v: V3<A, L>) -> V3<A, L> {
         self.cx.scale(v.x) + self.cy.scale(v.y) + self.cz.scale(v.z)
     }
 
     #[inline(always)]
-    fn apply_transpose(&self, v: V3<A>) -> V3<A> {
+    fn apply_transpose(&self, v: V3<A, L>) -> V3<A, L> {
         V3 {
             x: self.cx.dot(v),
             y: self.cy.dot(v),
@@ -179,15 +182,16 @@ impl<A: Arith> M3<A> {
     }
 }
 
-/// Whether the rotation-vector series is accurate for tan²(angle/2) = `t2` (false for NaN too).
-#[inline(always)]
-fn series_holds(t2: f64) -> bool {
-    t2 < 2.5e-3
-}
+/// Where the rotation-vector series is accurate: tan²(angle/2) below this (NaN is not).
+const SERIES_LIMIT: f64 = 2.5e-3;
 
 /// A quaternion per lane (w, x, y, z): lane `j` is `q[index(j)]`.
 #[inline(always)]
-fn gather_quat<A: Arith>(arith: A, q: &[Quat], index: impl Fn(usize) -> usize) -> [Lanes<A>; 4] {
+fn gather_quat<A: Regroup>(
+    arith: A,
+    q: &[Quat],
+    index: impl Fn(usize) -> usize,
+) -> [Lanes<A, LANES>; 4] {
     let v: [Quat; LANES] = std::array::from_fn(|j| q[index(j)]);
     [
         Lanes::from_fn(arith, |j| v[j].w),
@@ -199,16 +203,25 @@ fn gather_quat<A: Arith>(arith: A, q: &[Quat], index: impl Fn(usize) -> usize) -
 
 /// Per lane, `a` where the link's axis (0, 1 or 2 as `f64`) is `k`, and `b` elsewhere.
 #[inline(always)]
-fn on_axis<A: Arith>(axis: Lanes<A>, k: f64, a: Lanes<A>, b: Lanes<A>) -> Lanes<A> {
+fn on_axis<A: Arith<L>, const L: usize>(
+    axis: Lanes<A, L>,
+    k: f64,
+    a: Lanes<A, L>,
+    b: Lanes<A, L>,
+) -> Lanes<A, L> {
     Lanes {
-        v: axis.arith.select_eq(axis.v, k, a.v, b.v),
+        v: axis.arith.select_eq(axis.v, A::E::of(k), a.v, b.v),
         arith: axis.arith,
     }
 }
 
 /// The vector (a on the link axis, b across it) per lane.
 #[inline(always)]
-fn axial_split<A: Arith>(axis: Lanes<A>, a: Lanes<A>, b: Lanes<A>) -> V3<A> {
+fn axial_split<A: Arith<L>, const L: usize>(
+    axis: Lanes<A, L>,
+    a: Lanes<A, L>,
+    b: Lanes<A, L>,
+) -> V3<A, L> {
     V3 {
         x: on_axis(axis, 0.0, a, b),
         y: on_axis(axis, 1.0, a, b),
@@ -241,13 +254,31 @@ pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
     step: LinkStep,
 ) -> f64 {
     let (view, out) = scatter_into(voxels);
-    dispatch::<_, DAMPED, ACTUATED>(links, view, 0..links.len(), step, out)
+    let job = Job::double(links, view, 0..links.len(), step, out);
+    dispatch::<Double, _, _, LANES, DAMPED, ACTUATED>(job)
+}
+
+/// [`link_pass`] in mixed precision: the kernel reads `single`'s `f32` copy of the state (which
+/// must be this step's: written by the last integration or [`SingleCopy::copy_state`]) and its
+/// `f32` link constants, computes in `f32` eight links at a time, and its forces and moments are
+/// added to the `f64` accumulators link by link in link order, as [`link_pass`] adds its own (see
+/// [`super::single`]).
+#[inline(never)]
+pub fn link_pass_mixed<const DAMPED: bool, const ACTUATED: bool>(
+    links: &Links,
+    single: &SingleCopy,
+    voxels: &mut Voxels,
+    step: LinkStep,
+) -> f64 {
+    let (_, out) = scatter_into(voxels);
+    let job = single.job(links, 0..links.len(), step, out);
+    dispatch::<Mixed, _, _, SINGLE_LANES, DAMPED, ACTUATED>(job)
 }
 
 /// The state the kernel reads and the accumulators it adds to, the borrows split and every array
 /// cut to the voxel count (the kernel cuts them again inside, but without this cut too the
 /// threaded pass's twin, `link_loads`, was 15 % slower).
-fn scatter_into(voxels: &mut Voxels) -> (VoxelView<'_>, Scatter<'_>) {
+pub(super) fn scatter_into(voxels: &mut Voxels) -> (VoxelView<'_>, Scatter<'_>) {
     let nv = voxels.len();
     let Voxels {
         position,
@@ -271,18 +302,28 @@ fn scatter_into(voxels: &mut Voxels) -> (VoxelView<'_>, Scatter<'_>) {
     (view, out)
 }
 
-/// The forces and moments of links `range` (its start a multiple of [`LANES`]), stored link by
-/// link instead of added to the voxels: slot k − `range.start` of `loads` holds link k's force
-/// on its b end (the a end gets its opposite) and its moments on either end. Returns the largest
-/// axial strain among them. Added to the voxels in link order (`super::parallel`), they give the
-/// bits [`link_pass`] gives, so that threads can share the links of one step.
+/// The forces and moments of links `range`, stored link by link instead of added to the voxels:
+/// slot k − `range.start` of `loads` holds link k's force on its b end (the a end gets its
+/// opposite) and its moments on either end. Returns the largest axial strain among them. Added to
+/// the voxels in link order (`super::parallel`), they give the bits [`link_pass`] (or, with
+/// `single`, [`link_pass_mixed`]) gives, so that threads can share the links of one step. A
+/// `single` copy must be this step's, as for [`link_pass_mixed`].
 pub fn link_loads<const DAMPED: bool, const ACTUATED: bool>(
     links: &Links,
     voxels: &Voxels,
+    single: Option<&SingleCopy>,
     range: std::ops::Range<usize>,
     step: LinkStep,
     loads: LinkLoads,
 ) -> f64 {
+    let out = Store {
+        first: range.start,
+        loads,
+    };
+    if let Some(single) = single {
+        let job = single.job(links, range, step, out);
+        return dispatch::<Mixed, _, _, SINGLE_LANES, DAMPED, ACTUATED>(job);
+    }
     // Cut to the voxel count as `scatter_into` does (without it this pass was 15 % slower).
     let nv = voxels.len();
     let view = VoxelView {
@@ -291,49 +332,113 @@ pub fn link_loads<const DAMPED: bool, const ACTUATED: bool>(
         velocity: &voxels.velocity[..nv],
         angular_velocity: &voxels.angular_velocity[..nv],
     };
-    let out = Store {
-        first: range.start,
-        loads,
-    };
-    dispatch::<_, DAMPED, ACTUATED>(links, view, range, step, out)
+    let job = Job::double(links, view, range, step, out);
+    dispatch::<Double, _, _, LANES, DAMPED, ACTUATED>(job)
+}
+
+/// A precision of the kernel: its tokens on either instruction set.
+trait Precision<const L: usize> {
+    /// Explicit AVX2 vectors.
+    type Vector: Kernel<L>;
+    /// Portable lanes, on any CPU.
+    type Portable: Kernel<L, E = <Self::Vector as Arith<L>>::E>;
+    fn vector(avx2: pulp::x86::V3) -> Self::Vector;
+    const PORTABLE: Self::Portable;
+}
+
+/// Four `f64` lanes, reading the voxels' own state.
+struct Double;
+
+impl Precision<LANES> for Double {
+    type Vector = pulp::x86::V3;
+    type Portable = Portable;
+    fn vector(avx2: pulp::x86::V3) -> Self::Vector {
+        avx2
+    }
+    const PORTABLE: Portable = Portable;
+}
+
+/// Eight `f32` lanes, reading the state's `f32` copy.
+struct Mixed;
+
+impl Precision<SINGLE_LANES> for Mixed {
+    type Vector = Single<pulp::x86::V3>;
+    type Portable = Single<Portable>;
+    fn vector(avx2: pulp::x86::V3) -> Self::Vector {
+        Single(avx2)
+    }
+    const PORTABLE: Single<Portable> = Single(Portable);
 }
 
 /// Runs the kernel with explicit AVX2 vectors where the CPU has them, else on portable lanes.
 #[inline(always)]
-fn dispatch<O: LinkOut, const DAMPED: bool, const ACTUATED: bool>(
-    links: &Links,
-    view: VoxelView,
-    range: std::ops::Range<usize>,
-    step: LinkStep,
-    out: O,
-) -> f64 {
-    let job = Job {
-        links,
-        view,
-        range,
-        step,
-        out,
-    };
+fn dispatch<P, S, O, const L: usize, const DAMPED: bool, const ACTUATED: bool>(
+    job: Job<S, <P::Vector as Arith<L>>::E, O>,
+) -> f64
+where
+    P: Precision<L>,
+    S: Source<P::Vector, L> + Source<P::Portable, L>,
+    O: LinkOut,
+{
     #[cfg(target_arch = "x86_64")]
     if let Some(avx2) = pulp::x86::V3::try_new() {
         return pulp::Simd::vectorize(
             avx2,
-            LinkPass::<_, O, DAMPED, ACTUATED> {
-                arith: avx2,
+            LinkPass::<_, S, O, L, DAMPED, ACTUATED> {
+                arith: P::vector(avx2),
                 job: &mut Some(job),
             },
         );
     }
-    link_pass_lanes::<_, O, DAMPED, ACTUATED, true>(Portable, job)
+    link_pass_lanes::<_, S, O, L, DAMPED, ACTUATED, true>(P::PORTABLE, job)
 }
 
-/// What one run of the kernel reads and where it writes.
-struct Job<'a, O> {
-    links: &'a Links,
-    view: VoxelView<'a>,
-    range: std::ops::Range<usize>,
-    step: LinkStep,
-    out: O,
+/// What one run of the kernel reads and where it writes: the links' ends and axes, their
+/// constants and the voxels' state in the kernel's precision `E`.
+pub(super) struct Job<'a, S, E, O> {
+    pub(super) links: &'a Links,
+    pub(super) constants: LinkConstants<'a, E>,
+    pub(super) source: S,
+    pub(super) range: std::ops::Range<usize>,
+    pub(super) step: LinkStep,
+    pub(super) out: O,
+}
+
+impl<'a, O> Job<'a, VoxelView<'a>, f64, O> {
+    fn double(
+        links: &'a Links,
+        source: VoxelView<'a>,
+        range: std::ops::Range<usize>,
+        step: LinkStep,
+        out: O,
+    ) -> Self {
+        Self {
+            links,
+            constants: LinkConstants {
+                axial: &links.axial,
+                shear: &links.shear,
+                torsion: &links.torsion,
+                bending: &links.bending,
+                damping_time: &links.damping_time,
+                actuated_fraction: &links.actuated_fraction,
+            },
+            source,
+            range,
+            step,
+            out,
+        }
+    }
+}
+
+/// The per-link constants the kernel reads (see [`Links`]), in its precision.
+#[derive(Clone, Copy)]
+pub(super) struct LinkConstants<'a, E> {
+    pub(super) axial: &'a [E],
+    pub(super) shear: &'a [E],
+    pub(super) torsion: &'a [E],
+    pub(super) bending: &'a [E],
+    pub(super) damping_time: &'a [E],
+    pub(super) actuated_fraction: &'a [E],
 }
 
 /// The kernel as a `pulp` operation, so that it is compiled with the instruction set of its
@@ -341,20 +446,25 @@ struct Job<'a, O> {
 /// operation of more than eight words another way, which lost the inlined vector code, and a
 /// kernel that reached its slices through a reference reloaded them at every use (together 1.7
 /// times slower: docs/dynamics.md).
-struct LinkPass<'a, 'b, A: Arith, O, const DAMPED: bool, const ACTUATED: bool> {
+struct LinkPass<'a, 'b, A: Arith<L>, S, O, const L: usize, const DAMPED: bool, const ACTUATED: bool>
+{
     arith: A,
-    job: &'a mut Option<Job<'b, O>>,
+    job: &'a mut Option<Job<'b, S, A::E, O>>,
 }
 
-impl<A: Arith, O: LinkOut, const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd
-    for LinkPass<'_, '_, A, O, DAMPED, ACTUATED>
+impl<A, S, O, const L: usize, const DAMPED: bool, const ACTUATED: bool> pulp::WithSimd
+    for LinkPass<'_, '_, A, S, O, L, DAMPED, ACTUATED>
+where
+    A: Kernel<L>,
+    S: Source<A, L>,
+    O: LinkOut,
 {
     type Output = f64;
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
+    fn with_simd<Sd: pulp::Simd>(self, _simd: Sd) -> f64 {
         let job = self.job.take().expect("the job is set before the dispatch");
-        link_pass_lanes::<A, O, DAMPED, ACTUATED, true>(self.arith, job)
+        link_pass_lanes::<A, S, O, L, DAMPED, ACTUATED, true>(self.arith, job)
     }
 }
 
@@ -366,27 +476,63 @@ pub struct LinkLoads<'a> {
     pub moment_b: &'a mut [Vec3],
 }
 
-/// Where the kernel puts a group's results: lane j is link k0 + j, `count` lanes are real.
-trait LinkOut {
+/// Where the kernel puts a group of four links' results in `f64`: lane j is link k0 + j, `count`
+/// lanes are real.
+pub(super) trait LinkOut {
     /// Cuts per-voxel outputs to the voxel count, so that the check of an index into the state
     /// also covers them (without it the kernel was 5 % slower).
     fn cut_to(&mut self, _voxels: usize) {}
 
     #[allow(clippy::too_many_arguments)]
-    fn put<A: Arith>(
+    fn put<A: Regroup>(
         &mut self,
         k0: usize,
         count: usize,
         ends: &[(usize, usize, u8); LANES],
         run: bool,
-        f_b: V3<A>,
-        m_a: V3<A>,
-        m_b: V3<A>,
+        f_b: V3<A, LANES>,
+        m_a: V3<A, LANES>,
+        m_b: V3<A, LANES>,
     );
 }
 
+/// A kernel's arithmetic, with the way its results reach a [`LinkOut`].
+pub(super) trait Kernel<const L: usize>: Arith<L> {
+    /// Hands a group's results (lane j is link k0 + j, `count` lanes real; `run` as the kernel
+    /// found it) to `out`, group by group of four `f64` lanes in link order.
+    #[allow(clippy::too_many_arguments)]
+    fn put<O: LinkOut>(
+        self,
+        out: &mut O,
+        k0: usize,
+        count: usize,
+        ends: &[(usize, usize, u8); L],
+        run: bool,
+        f_b: V3<Self, L>,
+        m_a: V3<Self, L>,
+        m_b: V3<Self, L>,
+    );
+}
+
+impl<A: Regroup> Kernel<LANES> for A {
+    #[inline(always)]
+    fn put<O: LinkOut>(
+        self,
+        out: &mut O,
+        k0: usize,
+        count: usize,
+        ends: &[(usize, usize, u8); LANES],
+        run: bool,
+        f_b: V3<Self, LANES>,
+        m_a: V3<Self, LANES>,
+        m_b: V3<Self, LANES>,
+    ) {
+        out.put(k0, count, ends, run, f_b, m_a, m_b);
+    }
+}
+
 /// Adds each link's forces and moments to its voxels, link by link in link order.
-struct Scatter<'a> {
+pub(super) struct Scatter<'a> {
     force: &'a mut [Vec3],
     torque: &'a mut [Vec3],
 }
@@ -399,15 +545,15 @@ impl LinkOut for Scatter<'_> {
     }
 
     #[inline(always)]
-    fn put<A: Arith>(
+    fn put<A: Regroup>(
         &mut self,
         _k0: usize,
         count: usize,
         ends: &[(usize, usize, u8); LANES],
         run: bool,
-        f_b: V3<A>,
-        m_a: V3<A>,
-        m_b: V3<A>,
+        f_b: V3<A, LANES>,
+        m_a: V3<A, LANES>,
+        m_b: V3<A, LANES>,
     ) {
         let (force, torque) = (&mut *self.force, &mut *self.torque);
         if run {
@@ -439,15 +585,15 @@ struct Store<'a> {
 
 impl LinkOut for Store<'_> {
     #[inline(always)]
-    fn put<A: Arith>(
+    fn put<A: Regroup>(
         &mut self,
         k0: usize,
         count: usize,
         _ends: &[(usize, usize, u8); LANES],
         _run: bool,
-        f_b: V3<A>,
-        m_a: V3<A>,
-        m_b: V3<A>,
+        f_b: V3<A, LANES>,
+        m_a: V3<A, LANES>,
+        m_b: V3<A, LANES>,
     ) {
         let slots = k0 - self.first..k0 - self.first + count;
         let l = &mut self.loads;
@@ -467,10 +613,25 @@ impl LinkOut for Store<'_> {
     }
 }
 
+/// Where the kernel reads a group's voxel state: the voxels' own `f64` arrays ([`VoxelView`]) or
+/// their `f32` copy ([`SingleView`]).
+pub(super) trait Source<A: Arith<L>, const L: usize>: Copy {
+    /// The number of voxels.
+    fn len(&self) -> usize;
+    /// The same state with every array cut to [`Source::len`], so that one check of an index
+    /// covers all of them (done inside the vectorized function, where it counts).
+    fn cut(self) -> Self;
+    /// Lane `j` joins voxel `ends[j].0` to voxel `ends[j].1`.
+    fn gather<const DAMPED: bool>(&self, arith: A, ends: &[(usize, usize, u8); L]) -> Ends<A, L>;
+    /// Lane `j` joins voxel `a0 + j` to voxel `b0 + j` (a run): the same values as
+    /// [`Source::gather`], read as whole blocks.
+    fn gather_run<const DAMPED: bool>(&self, arith: A, a0: usize, b0: usize) -> Ends<A, L>;
+}
+
 /// The voxel state the link kernel reads, cut to one length so that one check of an index covers
 /// every array (or to one block of [`LANES`] voxels, see [`VoxelView::block`]).
 #[derive(Clone, Copy)]
-struct VoxelView<'a> {
+pub(super) struct VoxelView<'a> {
     position: &'a [Vec3],
     orientation: &'a [Quat],
     velocity: &'a [Vec3],
@@ -497,20 +658,46 @@ impl<'a> VoxelView<'a> {
     }
 }
 
-/// What the kernel reads of one group of links' two ends, one link per lane.
-struct Ends<A: Arith> {
-    qa: [Lanes<A>; 4],
-    qb: [Lanes<A>; 4],
-    /// x_b − x_a, world frame.
-    r: V3<A>,
-    /// Velocities and spins of both ends (read only when the pass is damped).
-    va: V3<A>,
-    vb: V3<A>,
-    wa: V3<A>,
-    wb: V3<A>,
+impl<A: Regroup> Source<A, LANES> for VoxelView<'_> {
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    #[inline(always)]
+    fn cut(self) -> Self {
+        self.block_at(0, self.position.len())
+    }
+
+    #[inline(always)]
+    fn gather<const DAMPED: bool>(
+        &self,
+        arith: A,
+        ends: &[(usize, usize, u8); LANES],
+    ) -> Ends<A, LANES> {
+        Ends::gather::<DAMPED>(arith, *self, |j| ends[j].0, *self, |j| ends[j].1)
+    }
+
+    #[inline(always)]
+    fn gather_run<const DAMPED: bool>(&self, arith: A, a0: usize, b0: usize) -> Ends<A, LANES> {
+        Ends::gather_run::<DAMPED>(arith, self.block(a0), self.block(b0))
+    }
 }
 
-impl<A: Arith> Ends<A> {
+/// What the kernel reads of one group of links' two ends, one link per lane.
+pub(super) struct Ends<A: Arith<L>, const L: usize> {
+    pub(super) qa: [Lanes<A, L>; 4],
+    pub(super) qb: [Lanes<A, L>; 4],
+    /// x_b − x_a, world frame.
+    pub(super) r: V3<A, L>,
+    /// Velocities and spins of both ends (read only when the pass is damped).
+    pub(super) va: V3<A, L>,
+    pub(super) vb: V3<A, L>,
+    pub(super) wa: V3<A, L>,
+    pub(super) wb: V3<A, L>,
+}
+
+impl<A: Regroup> Ends<A, LANES> {
     /// Lane `j` joins voxel `ia(j)` of `a` to voxel `ib(j)` of `b`.
     #[inline(always)]
     fn gather<const DAMPED: bool>(
@@ -576,27 +763,30 @@ impl<A: Arith> Ends<A> {
 
 /// `RUNS` false reads every group through the general gather (for the test that the two agree).
 #[inline(always)]
-fn link_pass_lanes<
-    A: Arith,
+pub(super) fn link_pass_lanes<
+    A: Kernel<L>,
+    S: Source<A, L>,
     O: LinkOut,
+    const L: usize,
     const DAMPED: bool,
     const ACTUATED: bool,
     const RUNS: bool,
 >(
     arith: A,
-    job: Job<O>,
+    job: Job<S, A::E, O>,
 ) -> f64 {
     let Job {
         links,
-        view,
+        constants,
+        source,
         range,
         step,
         mut out,
     } = job;
     // Every voxel array cut to one length here, inside the vectorized function: lengths that
     // arrive through `pulp`'s call are unrelated to the optimizer, and each access was checked.
-    let view = view.block_at(0, view.position.len());
-    out.cut_to(view.position.len());
+    let source = source.cut();
+    out.cut_to(source.len());
     let s = step.voxel_size;
     let stretch = step.actuation_factor - 1.0;
     let n = links.len();
@@ -607,24 +797,22 @@ fn link_pass_lanes<
     let end = range.end.min(n);
     let mut k0 = range.start;
     while k0 < end {
-        let count = LANES.min(end - k0);
+        let count = L.min(end - k0);
         // Lane j holds link k0 + j; past the end, copies of the last link (not scattered).
         let link = |j: usize| {
             let k = (k0 + j).min(n - 1);
             (end_a[k] as usize, end_b[k] as usize, link_axis[k])
         };
-        let ends: [(usize, usize, u8); LANES] = std::array::from_fn(link);
-        // A run: four consecutive voxels linked to four consecutive voxels (the links are in
+        let ends: [(usize, usize, u8); L] = lane_array(link);
+        // A run: L consecutive voxels linked to L consecutive voxels (the links are in
         // axis-major grid order, so this is every group inside a solid stretch of the body).
         let (a0, b0) = (ends[0].0, ends[0].1);
-        let run = RUNS
-            && count == LANES
-            && (1..LANES).all(|j| ends[j].0 == a0 + j && ends[j].1 == b0 + j);
-        let axis = Lanes::from_fn(arith, |j| f64::from(ends[j].2));
+        let run = RUNS && count == L && (1..L).all(|j| ends[j].0 == a0 + j && ends[j].1 == b0 + j);
+        let axis = Lanes::from_fn(arith, |j| A::E::of(f64::from(ends[j].2)));
         let g = if run {
-            Ends::gather_run::<DAMPED>(arith, view.block(a0), view.block(b0))
+            source.gather_run::<DAMPED>(arith, a0, b0)
         } else {
-            Ends::gather::<DAMPED>(arith, view, |j| ends[j].0, view, |j| ends[j].1)
+            source.gather::<DAMPED>(arith, &ends)
         };
         let Ends {
             qa,
@@ -644,8 +832,9 @@ fn link_pass_lanes<
             y: aw * by + ax * bz - ay * bw - az * bx,
             z: aw * bz - ax * by + ay * bx - az * bw,
         };
+        let (minus, plus) = (splat(-1.0), splat(1.0));
         let sign = Lanes {
-            v: arith.select_negative(rel_w.v, arith.splat(-1.0), arith.splat(1.0)),
+            v: arith.select_negative(rel_w.v, minus.v, plus.v),
             arith,
         };
         let w = rel_w * sign;
@@ -658,28 +847,32 @@ fn link_pass_lanes<
         let d = frame.apply_transpose(r);
 
         // Rotation vector of sign · q_rel: 2 atan(|v|/w) v/|v|, a series below ~6°
-        // (see [`Quat::rotation_vector`]), atan2 in the lanes above.
+        // (see [`Quat::rotation_vector`]), atan2 in the lanes above (in `f64` whatever the
+        // lanes' precision, so that one `atan2` serves both).
         let s2 = rel.dot(rel);
         let inv_w = splat(1.0) / w;
         let t2 = s2 * inv_w * inv_w;
         let series = splat(1.0) - t2 * (splat(1.0 / 3.0) - t2 * (splat(0.2) - t2 * (1.0 / 7.0)));
         let mut phi_scale = inv_w * series * 2.0;
-        let t2 = t2.to_array();
-        if !t2.iter().all(|&t2| series_holds(t2)) {
+        // One test per lane, in the lanes' type, whichever way it is made: a lane's result must
+        // not depend on the lanes beside it (threads cut the links at other places).
+        let limit = A::E::of(SERIES_LIMIT);
+        if !arith.all_below(t2.v, limit) {
+            let t2 = t2.to_array();
             let (scale, s2, w) = (phi_scale.to_array(), s2.to_array(), w.to_array());
             phi_scale = Lanes::from_fn(arith, |j| {
-                if series_holds(t2[j]) {
+                if t2[j] < limit {
                     scale[j]
                 } else {
-                    let sv = s2[j].sqrt();
-                    2.0 * sv.atan2(w[j]) / sv
+                    let sv = s2[j].wide().sqrt();
+                    A::E::of(2.0 * sv.atan2(w[j].wide()) / sv)
                 }
             });
         }
         let phi = rel.scale(phi_scale * sign);
 
         let rest = if ACTUATED {
-            (Lanes::load(arith, &links.actuated_fraction, k0) * stretch + splat(1.0)) * s
+            (Lanes::load(arith, constants.actuated_fraction, k0) * stretch + splat(1.0)) * s
         } else {
             splat(s)
         };
@@ -697,7 +890,7 @@ fn link_pass_lanes<
             // Rate of d in the link frame, which turns with the mean spin of the pair.
             let spin = (wa + wb).scale(splat(0.5));
             let v_rel = vb - va - spin.cross(r);
-            let beta = Lanes::load(arith, &links.damping_time, k0);
+            let beta = Lanes::load(arith, constants.damping_time, k0);
             e = e + frame.apply_transpose(v_rel).scale(beta);
             p = p + frame.apply_transpose(wb - wa).scale(beta);
         }
@@ -706,13 +899,13 @@ fn link_pass_lanes<
         // shear (12EI/L³) and bending (EI/L) across it.
         let k_e = axial_split(
             axis,
-            Lanes::load(arith, &links.axial, k0),
-            Lanes::load(arith, &links.shear, k0),
+            Lanes::load(arith, constants.axial, k0),
+            Lanes::load(arith, constants.shear, k0),
         );
         let k_p = axial_split(
             axis,
-            Lanes::load(arith, &links.torsion, k0),
-            Lanes::load(arith, &links.bending, k0),
+            Lanes::load(arith, constants.torsion, k0),
+            Lanes::load(arith, constants.bending, k0),
         );
         let f_b = frame.apply(V3 {
             x: -(k_e.x * e.x),
@@ -728,13 +921,13 @@ fn link_pass_lanes<
         let m_a = m_sym + c;
         let m_b = c - m_sym;
 
-        out.put(k0, count, &ends, run, f_b, m_a, m_b);
-        k0 += LANES;
+        arith.put(&mut out, k0, count, &ends, run, f_b, m_a, m_b);
+        k0 += L;
     }
     max_strain
         .to_array()
         .iter()
-        .fold(0.0, |m: f64, &x| m.max(x))
+        .fold(0.0, |m: f64, &x| m.max(x.wide()))
         * (1.0 / s)
 }
 
@@ -822,17 +1015,11 @@ mod tests {
         let strain_a = link_pass::<true, true>(&links, &mut a, step);
         let portable = |voxels: &mut Voxels, runs: bool| {
             let (view, out) = scatter_into(voxels);
-            let job = Job {
-                links: &links,
-                view,
-                range: 0..links.len(),
-                step,
-                out,
-            };
+            let job = Job::double(&links, view, 0..links.len(), step, out);
             if runs {
-                link_pass_lanes::<_, _, true, true, true>(Portable, job)
+                link_pass_lanes::<_, _, _, LANES, true, true, true>(Portable, job)
             } else {
-                link_pass_lanes::<_, _, true, true, false>(Portable, job)
+                link_pass_lanes::<_, _, _, LANES, true, true, false>(Portable, job)
             }
         };
         let strain_b = portable(&mut b, true);

@@ -22,13 +22,15 @@ mod passes;
 mod poisson;
 mod scene;
 mod simulation;
+mod single;
 mod state;
 
 pub use error::{DynamicsError, Result};
 pub use math::{Mat3, Quat, Vec3};
 pub use parallel::EvaluationThreads;
 pub use scene::{
-    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, FrictionLaw, foam_palette,
+    Actuation, DampingParams, DivergenceLimits, DynamicScene, Floor, FrictionLaw, LinkPrecision,
+    foam_palette,
 };
 pub use simulation::{Divergence, DivergenceReason, Energy, Pass, Simulation};
 pub use state::TOP_EIGENVALUE;

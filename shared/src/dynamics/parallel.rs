@@ -15,6 +15,7 @@
 use super::integrate::{IntegrationSummary, VoxelState, integrate_part};
 use super::link::{LinkLoads, LinkStep, link_loads};
 use super::math::Vec3;
+use super::single::SingleCopy;
 use super::state::{Links, Voxels};
 
 /// Links in the smallest part a thread takes (a multiple of the kernel's four lanes).
@@ -105,12 +106,13 @@ impl Threaded {
         }
     }
 
-    /// The link pass (`link::link_pass`) on the current pool's threads; returns the largest
-    /// axial strain.
+    /// The link pass (`link::link_pass`, or with `single`, a copy of this step's state,
+    /// `link::link_pass_mixed`) on the current pool's threads; returns the largest axial strain.
     pub fn link_pass<const DAMPED: bool, const ACTUATED: bool>(
         &mut self,
         links: &Links,
         voxels: &mut Voxels,
+        single: Option<&SingleCopy>,
         step: LinkStep,
     ) -> f64 {
         let loads = LinkLoads {
@@ -125,7 +127,7 @@ impl Threaded {
             grain(links.len(), LINK_GRAIN),
             &|part: LinkLoads, first| {
                 let range = first..first + part.force_b.len();
-                link_loads::<DAMPED, ACTUATED>(links, state, range, step, part)
+                link_loads::<DAMPED, ACTUATED>(links, state, single, range, step, part)
             },
             &f64::max,
         );

@@ -8,14 +8,15 @@ use serde::{Deserialize, Serialize};
 use super::collide::Collisions;
 use super::error::{DynamicsError, Result};
 use super::integrate::integrate_pass;
-use super::link::{LinkStep, link_energy, link_pass};
+use super::link::{LinkStep, link_energy, link_pass, link_pass_mixed};
 use super::math::Vec3;
 use super::parallel::Threaded;
 use super::passes::{
     FloorContact, external_force_pass, floor_pass, global_damping_pass, gravity_pass,
 };
 use super::poisson::PoissonCoupling;
-use super::scene::DynamicScene;
+use super::scene::{DynamicScene, LinkPrecision};
+use super::single::SingleCopy;
 use super::state::{Links, Voxels, build_state, link_damping_time};
 use crate::material::Palette;
 use crate::voxel::VoxelGrid;
@@ -91,6 +92,9 @@ pub struct Simulation {
     actuation_time: Option<f64>,
     /// Built at the first step run inside a thread pool (see [`Simulation::step`]).
     threaded: Option<Threaded>,
+    /// The mixed-precision kernel's `f32` copy (`LinkPrecision::Mixed`), else none; written from
+    /// the state at every link pass.
+    single: Option<SingleCopy>,
 }
 
 impl Simulation {
@@ -170,7 +174,11 @@ impl Simulation {
             diverged: None,
             actuation_time: None,
             threaded: None,
+            single: None,
         };
+        if scene.link_precision == LinkPrecision::Mixed {
+            sim.single = Some(SingleCopy::new(&sim.links, sim.voxels.len()));
+        }
         sim.rebuild_passes();
         Ok(sim)
     }
@@ -448,10 +456,16 @@ impl Simulation {
         step: LinkStep,
     ) -> f64 {
         let (l, v) = (&self.links, &mut self.voxels);
+        if let Some(single) = self.single.as_mut() {
+            single.copy_state::<DAMPED>(v);
+        }
+        let single = self.single.as_ref();
         if in_pool {
             self.threaded
                 .get_or_insert_with(|| Threaded::new(l, v.len()))
-                .link_pass::<DAMPED, ACTUATED>(l, v, step)
+                .link_pass::<DAMPED, ACTUATED>(l, v, single, step)
+        } else if let Some(single) = single {
+            link_pass_mixed::<DAMPED, ACTUATED>(l, single, v, step)
         } else {
             link_pass::<DAMPED, ACTUATED>(l, v, step)
         }

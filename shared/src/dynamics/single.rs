@@ -1,0 +1,840 @@
+//! The mixed-precision link kernel: the state stays `f64` and is integrated in `f64`, and the link
+//! kernel reads an `f32` copy of it and computes in `f32`, eight links per 256-bit vector instead
+//! of four.
+//!
+//! Why not an `f32` state: a voxel moves v·dt ≈ 10⁻⁹ m per step, and an `f32` position 16–32 mm
+//! from the origin has a spacing of 1.9·10⁻⁹ m, so an `f32` integration would lose the motion. A
+//! link only needs the difference of its two ends' positions, their orientations, and (damped)
+//! their velocities and spins; rounding those to `f32` moves a random robot's gait 7–40 times
+//! less than halving the time step does (docs/dynamics.md, "Measured in session 30"). The copy
+//! holds positions relative to voxel 0 (`SingleCopy::copy_state`), so that a body far from the
+//! origin loses no more than one near it: the kernel is translation-invariant to `f64` rounding.
+//!
+//! The kernel is the double-precision one ([`super::link`]) on other lanes: the same IEEE
+//! operations in the same order, no fused multiply-add, so its AVX2 and portable copies give the
+//! same bits, and each group's forces and moments are widened to `f64` (exact) and added to the
+//! voxels four links at a time in link order, as the double kernel adds its own. So the result is
+//! the same bits for any thread count and any x86-64 CPU, as before; it differs from the double
+//! kernel's by the rounding measured in docs/dynamics.md.
+
+use pulp::Simd;
+
+use super::lanes::{Arith, LANES, Lanes, Portable, Regroup, load_columns3, load_columns4};
+use super::link::{Ends, Job, Kernel, LinkConstants, LinkOut, LinkStep, Source, V3};
+use super::math::Vec3;
+use super::state::{Links, Voxels};
+
+/// Links computed together in single precision, one per lane.
+pub const SINGLE_LANES: usize = 8;
+
+/// The single-precision arithmetic of a double-precision token: eight `f32` lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct Single<T>(pub T);
+
+/// Eight `f32` lanes whose results reach the voxels as two groups of four `f64` lanes.
+pub(super) trait Widen: Arith<SINGLE_LANES, E = f32> {
+    /// The double-precision token of the same instruction set.
+    type Wide: Regroup;
+    fn wide(self) -> Self::Wide;
+    /// Lanes 0–3 and 4–7, each converted to `f64` (exactly).
+    fn halves(self, v: Self::V) -> [<Self::Wide as Arith<LANES>>::V; 2];
+    /// Lanes 0–3 from `lo`, 4–7 from `hi`.
+    fn join(self, lo: [f32; LANES], hi: [f32; LANES]) -> Self::V;
+}
+
+impl Single<Portable> {
+    #[inline(always)]
+    fn zip(a: [f32; 8], b: [f32; 8], f: impl Fn(f32, f32) -> f32) -> [f32; 8] {
+        std::array::from_fn(|j| f(a[j], b[j]))
+    }
+}
+
+impl Arith<SINGLE_LANES> for Single<Portable> {
+    type E = f32;
+    type V = [f32; SINGLE_LANES];
+    #[inline(always)]
+    fn splat(self, x: f32) -> Self::V {
+        [x; SINGLE_LANES]
+    }
+    #[inline(always)]
+    fn vector(self, a: Self::V) -> Self::V {
+        a
+    }
+    #[inline(always)]
+    fn to_array(self, v: Self::V) -> Self::V {
+        v
+    }
+    #[inline(always)]
+    fn add(self, a: Self::V, b: Self::V) -> Self::V {
+        Self::zip(a, b, |a, b| a + b)
+    }
+    #[inline(always)]
+    fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+        Self::zip(a, b, |a, b| a - b)
+    }
+    #[inline(always)]
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+        Self::zip(a, b, |a, b| a * b)
+    }
+    #[inline(always)]
+    fn div(self, a: Self::V, b: Self::V) -> Self::V {
+        Self::zip(a, b, |a, b| a / b)
+    }
+    #[inline(always)]
+    fn sqrt(self, a: Self::V) -> Self::V {
+        a.map(f32::sqrt)
+    }
+    #[inline(always)]
+    fn neg(self, a: Self::V) -> Self::V {
+        a.map(|a| -a)
+    }
+    #[inline(always)]
+    fn select_eq(self, key: Self::V, k: f32, a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|j| if key[j] == k { a[j] } else { b[j] })
+    }
+    #[inline(always)]
+    fn select_negative(self, x: Self::V, a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|j| if x[j] < 0.0 { a[j] } else { b[j] })
+    }
+    #[inline(always)]
+    fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
+        Self::zip(m, x, |m, x| m.max(x.abs()))
+    }
+    #[inline(always)]
+    fn all_below(self, v: Self::V, k: f32) -> bool {
+        v.iter().all(|&x| x < k)
+    }
+}
+
+impl Widen for Single<Portable> {
+    type Wide = Portable;
+    #[inline(always)]
+    fn wide(self) -> Portable {
+        self.0
+    }
+    #[inline(always)]
+    fn halves(self, v: Self::V) -> [[f64; LANES]; 2] {
+        [
+            std::array::from_fn(|j| f64::from(v[j])),
+            std::array::from_fn(|j| f64::from(v[LANES + j])),
+        ]
+    }
+    #[inline(always)]
+    fn join(self, lo: [f32; LANES], hi: [f32; LANES]) -> Self::V {
+        [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]]
+    }
+}
+
+/// x86-64 with AVX2 (chosen at run time): eight `f32`s in one 256-bit register.
+impl Arith<SINGLE_LANES> for Single<pulp::x86::V3> {
+    type E = f32;
+    type V = pulp::f32x8;
+    #[inline(always)]
+    fn splat(self, x: f32) -> Self::V {
+        self.0.splat_f32s(x)
+    }
+    #[inline(always)]
+    fn vector(self, a: [f32; SINGLE_LANES]) -> Self::V {
+        pulp::cast(a)
+    }
+    #[inline(always)]
+    fn to_array(self, v: Self::V) -> [f32; SINGLE_LANES] {
+        pulp::cast(v)
+    }
+    #[inline(always)]
+    fn add(self, a: Self::V, b: Self::V) -> Self::V {
+        self.0.add_f32s(a, b)
+    }
+    #[inline(always)]
+    fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+        self.0.sub_f32s(a, b)
+    }
+    #[inline(always)]
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+        self.0.mul_f32s(a, b)
+    }
+    #[inline(always)]
+    fn div(self, a: Self::V, b: Self::V) -> Self::V {
+        self.0.div_f32s(a, b)
+    }
+    #[inline(always)]
+    fn sqrt(self, a: Self::V) -> Self::V {
+        self.0.sqrt_f32s(a)
+    }
+    #[inline(always)]
+    fn neg(self, a: Self::V) -> Self::V {
+        self.0.xor_f32s(a, self.0.splat_f32s(-0.0))
+    }
+    #[inline(always)]
+    fn select_eq(self, key: Self::V, k: f32, a: Self::V, b: Self::V) -> Self::V {
+        let s = self.0;
+        s.select_f32s(s.equal_f32s(key, s.splat_f32s(k)), a, b)
+    }
+    #[inline(always)]
+    fn select_negative(self, x: Self::V, a: Self::V, b: Self::V) -> Self::V {
+        let s = self.0;
+        s.select_f32s(s.less_than_f32s(x, s.splat_f32s(0.0)), a, b)
+    }
+    #[inline(always)]
+    fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
+        let s = self.0;
+        let x = s.abs_f32s(x);
+        s.select_f32s(s.less_than_f32s(m, x), x, m)
+    }
+    #[inline(always)]
+    fn all_below(self, v: Self::V, k: f32) -> bool {
+        let s = self.0;
+        let below = s.less_than_f32s(v, s.splat_f32s(k));
+        s.avx._mm256_movemask_ps(pulp::cast(below)) == 0xff
+    }
+}
+
+impl Widen for Single<pulp::x86::V3> {
+    type Wide = pulp::x86::V3;
+    #[inline(always)]
+    fn wide(self) -> pulp::x86::V3 {
+        self.0
+    }
+    #[inline(always)]
+    fn halves(self, v: Self::V) -> [pulp::f64x4; 2] {
+        use std::arch::x86_64::__m256;
+        let avx = self.0.avx;
+        let v: __m256 = pulp::cast(v);
+        [
+            pulp::cast(avx._mm256_cvtps_pd(avx._mm256_castps256_ps128(v))),
+            pulp::cast(avx._mm256_cvtps_pd(avx._mm256_extractf128_ps::<1>(v))),
+        ]
+    }
+    #[inline(always)]
+    fn join(self, lo: [f32; LANES], hi: [f32; LANES]) -> Self::V {
+        pulp::cast(self.0.avx._mm256_set_m128(pulp::cast(hi), pulp::cast(lo)))
+    }
+}
+
+impl<T: Copy> Kernel<SINGLE_LANES> for Single<T>
+where
+    Single<T>: Widen,
+{
+    #[inline(always)]
+    fn put<O: LinkOut>(
+        self,
+        out: &mut O,
+        k0: usize,
+        count: usize,
+        ends: &[(usize, usize, u8); SINGLE_LANES],
+        _run: bool,
+        f_b: V3<Self, SINGLE_LANES>,
+        m_a: V3<Self, SINGLE_LANES>,
+        m_b: V3<Self, SINGLE_LANES>,
+    ) {
+        // Both halves of each component, converted once (in functions, not closures: a closure
+        // is compiled without the vector instructions of the function around it).
+        let (f_b, m_a, m_b) = (halves(self, f_b), halves(self, m_a), halves(self, m_b));
+        for h in 0..SINGLE_LANES / LANES {
+            let first = LANES * h;
+            if count <= first {
+                break;
+            }
+            let real = (count - first).min(LANES);
+            let mut e = [(0, 0, 0); LANES];
+            e.copy_from_slice(&ends[first..first + LANES]);
+            // Four consecutive voxels linked to four: added as blocks, as the double kernel does.
+            let mut run = real == LANES;
+            for (j, &(a, b, _)) in e.iter().enumerate() {
+                run &= a == e[0].0 + j && b == e[0].1 + j;
+            }
+            out.put(k0 + first, real, &e, run, f_b[h], m_a[h], m_b[h]);
+        }
+    }
+}
+
+/// Lanes 0–3 and 4–7 of a 3-vector, each converted to `f64` (exactly).
+#[inline(always)]
+fn halves<A: Widen>(arith: A, v: V3<A, SINGLE_LANES>) -> [V3<A::Wide, LANES>; 2] {
+    let wide = arith.wide();
+    let (x, y, z) = (
+        arith.halves(v.x.v),
+        arith.halves(v.y.v),
+        arith.halves(v.z.v),
+    );
+    [
+        V3 {
+            x: Lanes {
+                v: x[0],
+                arith: wide,
+            },
+            y: Lanes {
+                v: y[0],
+                arith: wide,
+            },
+            z: Lanes {
+                v: z[0],
+                arith: wide,
+            },
+        },
+        V3 {
+            x: Lanes {
+                v: x[1],
+                arith: wide,
+            },
+            y: Lanes {
+                v: y[1],
+                arith: wide,
+            },
+            z: Lanes {
+                v: z[1],
+                arith: wide,
+            },
+        },
+    ]
+}
+
+/// Components of the `f32` copy, one array each: position (relative to voxel 0), orientation,
+/// velocity, spin.
+const POSITION: usize = 0;
+const ORIENTATION: usize = 3;
+const VELOCITY: usize = 7;
+const SPIN: usize = 10;
+const COMPONENTS: usize = 13;
+
+/// The `f32` copy of the state and link constants that the mixed-precision kernel reads.
+#[derive(Clone, Debug)]
+pub struct SingleCopy {
+    /// One array per component (see [`POSITION`] …), one entry per voxel.
+    state: [Vec<f32>; COMPONENTS],
+    axial: Vec<f32>,
+    shear: Vec<f32>,
+    torsion: Vec<f32>,
+    bending: Vec<f32>,
+    damping_time: Vec<f32>,
+    actuated_fraction: Vec<f32>,
+}
+
+impl SingleCopy {
+    /// The copy for `voxels` voxels joined by `links` (its link constants rounded to `f32` once).
+    pub fn new(links: &Links, voxels: usize) -> Self {
+        let round = |x: &[f64]| x.iter().map(|&x| x as f32).collect();
+        Self {
+            state: std::array::from_fn(|_| vec![0.0; voxels]),
+            axial: round(&links.axial),
+            shear: round(&links.shear),
+            torsion: round(&links.torsion),
+            bending: round(&links.bending),
+            damping_time: round(&links.damping_time),
+            actuated_fraction: round(&links.actuated_fraction),
+        }
+    }
+
+    /// Writes the copy from the voxels' state: what the kernel reads (velocities and spins only
+    /// when `DAMPED`), positions relative to voxel 0's.
+    pub fn copy_state<const DAMPED: bool>(&mut self, voxels: &Voxels) {
+        let job = CopyJob {
+            voxels,
+            state: &mut self.state,
+        };
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx2) = pulp::x86::V3::try_new() {
+            return pulp::Simd::vectorize(
+                avx2,
+                CopyPass::<_, DAMPED> {
+                    arith: avx2,
+                    job: &mut Some(job),
+                },
+            );
+        }
+        copy_lanes::<_, DAMPED>(Portable, job);
+    }
+
+    /// A run of the kernel over links `range` on this copy, its results going to `out`.
+    pub(super) fn job<'a, O>(
+        &'a self,
+        links: &'a Links,
+        range: std::ops::Range<usize>,
+        step: LinkStep,
+        out: O,
+    ) -> Job<'a, SingleView<'a>, f32, O> {
+        Job {
+            links,
+            constants: LinkConstants {
+                axial: &self.axial,
+                shear: &self.shear,
+                torsion: &self.torsion,
+                bending: &self.bending,
+                damping_time: &self.damping_time,
+                actuated_fraction: &self.actuated_fraction,
+            },
+            source: SingleView {
+                c: std::array::from_fn(|k| self.state[k].as_slice()),
+            },
+            range,
+            step,
+            out,
+        }
+    }
+}
+
+/// What the copy reads and writes.
+struct CopyJob<'a> {
+    voxels: &'a Voxels,
+    state: &'a mut [Vec<f32>; COMPONENTS],
+}
+
+/// The copy as a `pulp` operation (see `link::LinkPass`).
+struct CopyPass<'a, 'b, A, const DAMPED: bool> {
+    arith: A,
+    job: &'a mut Option<CopyJob<'b>>,
+}
+
+impl<A: Regroup, const DAMPED: bool> pulp::WithSimd for CopyPass<'_, '_, A, DAMPED> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let job = self.job.take().expect("the job is set before the dispatch");
+        copy_lanes::<A, DAMPED>(self.arith, job);
+    }
+}
+
+/// Four voxels at a time: each block's `f64` columns, rounded to `f32`.
+#[inline(always)]
+fn copy_lanes<A: Regroup, const DAMPED: bool>(arith: A, job: CopyJob) {
+    let CopyJob { voxels, state } = job;
+    let n = voxels.len();
+    let (position, orientation) = (&voxels.position[..n], &voxels.orientation[..n]);
+    let (velocity, spin) = (&voxels.velocity[..n], &voxels.angular_velocity[..n]);
+    let mut out: [&mut [f32]; COMPONENTS] = state.each_mut().map(|c| &mut c[..n]);
+    let origin = position.first().copied().unwrap_or(Vec3::ZERO);
+    let o = [
+        Lanes::splat(arith, origin.x),
+        Lanes::splat(arith, origin.y),
+        Lanes::splat(arith, origin.z),
+    ];
+    let whole = n - n % LANES;
+    for i0 in (0..whole).step_by(LANES) {
+        let r = i0..i0 + LANES;
+        let [x, y, z] = load_columns3(arith, &position[r.clone()]);
+        put(&mut out[POSITION][r.clone()], x - o[0]);
+        put(&mut out[POSITION + 1][r.clone()], y - o[1]);
+        put(&mut out[POSITION + 2][r.clone()], z - o[2]);
+        let [w, x, y, z] = load_columns4(arith, &orientation[r.clone()]);
+        put(&mut out[ORIENTATION][r.clone()], w);
+        put(&mut out[ORIENTATION + 1][r.clone()], x);
+        put(&mut out[ORIENTATION + 2][r.clone()], y);
+        put(&mut out[ORIENTATION + 3][r.clone()], z);
+        if DAMPED {
+            for (k, block) in [(VELOCITY, velocity), (SPIN, spin)] {
+                let [x, y, z] = load_columns3(arith, &block[r.clone()]);
+                put(&mut out[k][r.clone()], x);
+                put(&mut out[k + 1][r.clone()], y);
+                put(&mut out[k + 2][r.clone()], z);
+            }
+        }
+    }
+    let take = if DAMPED { COMPONENTS } else { VELOCITY };
+    for i in whole..n {
+        let (p, q) = (position[i] - origin, orientation[i]);
+        let (v, w) = (velocity[i], spin[i]);
+        let values = [
+            p.x, p.y, p.z, q.w, q.x, q.y, q.z, v.x, v.y, v.z, w.x, w.y, w.z,
+        ];
+        for (c, value) in out.iter_mut().zip(values).take(take) {
+            c[i] = value as f32;
+        }
+    }
+}
+
+/// Four voxels' component `l`, rounded to `f32`, into `out` (a function, not a closure: a closure is
+/// compiled without the vector instructions of the function around it).
+#[inline(always)]
+fn put<A: Regroup>(out: &mut [f32], l: Lanes<A, LANES>) {
+    out.copy_from_slice(&l.arith.narrow(l.v));
+}
+
+/// The `f32` copy as the kernel reads it: one array per component, cut to the voxel count.
+#[derive(Clone, Copy)]
+pub(super) struct SingleView<'a> {
+    c: [&'a [f32]; COMPONENTS],
+}
+
+/// How [`ends`] reads one end's components: lane by lane, or as whole blocks.
+trait Read<A: Arith<SINGLE_LANES, E = f32>> {
+    /// Component `k` of the eight voxels, one per lane.
+    fn lanes(&self, arith: A, k: usize) -> Lanes<A, SINGLE_LANES>;
+
+    /// Components `k..k + 3`.
+    #[inline(always)]
+    fn v3(&self, arith: A, k: usize) -> V3<A, SINGLE_LANES> {
+        V3 {
+            x: self.lanes(arith, k),
+            y: self.lanes(arith, k + 1),
+            z: self.lanes(arith, k + 2),
+        }
+    }
+
+    /// The orientation (w, x, y, z).
+    #[inline(always)]
+    fn quat(&self, arith: A) -> [Lanes<A, SINGLE_LANES>; 4] {
+        [
+            self.lanes(arith, ORIENTATION),
+            self.lanes(arith, ORIENTATION + 1),
+            self.lanes(arith, ORIENTATION + 2),
+            self.lanes(arith, ORIENTATION + 3),
+        ]
+    }
+}
+
+/// Voxels `index(j)`, gathered lane by lane.
+struct Gathered<'a, F> {
+    view: &'a SingleView<'a>,
+    index: F,
+}
+
+impl<A: Arith<SINGLE_LANES, E = f32>, F: Fn(usize) -> usize> Read<A> for Gathered<'_, F> {
+    #[inline(always)]
+    fn lanes(&self, arith: A, k: usize) -> Lanes<A, SINGLE_LANES> {
+        let c = self.view.c[k];
+        Lanes::from_fn(arith, |j| c[(self.index)(j)])
+    }
+}
+
+/// Voxels `i0..i0 + 8`, read as one vector per component.
+struct Block<'a> {
+    view: &'a SingleView<'a>,
+    i0: usize,
+}
+
+impl<A: Arith<SINGLE_LANES, E = f32>> Read<A> for Block<'_> {
+    #[inline(always)]
+    fn lanes(&self, arith: A, k: usize) -> Lanes<A, SINGLE_LANES> {
+        Lanes::block(arith, &self.view.c[k][self.i0..])
+    }
+}
+
+/// Four voxels of one component: `i0..i0 + 4`, or gathered.
+trait ReadHalf {
+    fn half(&self, c: &[f32]) -> [f32; LANES];
+}
+
+/// Voxels `i0..i0 + 4` (a run of four links), one 128-bit load.
+struct Run4(usize);
+
+impl ReadHalf for Run4 {
+    #[inline(always)]
+    fn half(&self, c: &[f32]) -> [f32; LANES] {
+        *c[self.0..].first_chunk().expect("a run of four voxels")
+    }
+}
+
+/// Voxels `index[j]`, one by one.
+struct Gather4([usize; LANES]);
+
+impl ReadHalf for Gather4 {
+    #[inline(always)]
+    fn half(&self, c: &[f32]) -> [f32; LANES] {
+        let i = &self.0;
+        [c[i[0]], c[i[1]], c[i[2]], c[i[3]]]
+    }
+}
+
+/// Eight voxels as two halves of four, each a run or gathered.
+struct Halves<'a, Lo, Hi> {
+    view: &'a SingleView<'a>,
+    lo: Lo,
+    hi: Hi,
+}
+
+impl<A: Widen, Lo: ReadHalf, Hi: ReadHalf> Read<A> for Halves<'_, Lo, Hi> {
+    #[inline(always)]
+    fn lanes(&self, arith: A, k: usize) -> Lanes<A, SINGLE_LANES> {
+        let c = self.view.c[k];
+        Lanes {
+            v: arith.join(self.lo.half(c), self.hi.half(c)),
+            arith,
+        }
+    }
+}
+
+/// Whether links `h..h + 4` of a group join four consecutive voxels to four consecutive voxels.
+#[inline(always)]
+fn run_of_four(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> bool {
+    let (a0, b0) = (ends[h].0, ends[h].1);
+    let mut run = true;
+    for j in 1..LANES {
+        run &= ends[h + j].0 == a0 + j && ends[h + j].1 == b0 + j;
+    }
+    run
+}
+
+/// The a (`B` false) or b ends of links `h..h + 4`, gathered.
+#[inline(always)]
+fn gather4<const B: bool>(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> Gather4 {
+    let end = |j: usize| if B { ends[h + j].1 } else { ends[h + j].0 };
+    Gather4([end(0), end(1), end(2), end(3)])
+}
+
+/// What the kernel reads of the links from the voxels `a` reads to those `b` reads.
+#[inline(always)]
+fn ends<A: Arith<SINGLE_LANES, E = f32>, const DAMPED: bool>(
+    arith: A,
+    a: impl Read<A>,
+    b: impl Read<A>,
+) -> Ends<A, SINGLE_LANES> {
+    let zero = V3::splat(arith, 0.0);
+    let (mut va, mut vb, mut wa, mut wb) = (zero, zero, zero, zero);
+    if DAMPED {
+        (va, vb) = (a.v3(arith, VELOCITY), b.v3(arith, VELOCITY));
+        (wa, wb) = (a.v3(arith, SPIN), b.v3(arith, SPIN));
+    }
+    Ends {
+        qa: a.quat(arith),
+        qb: b.quat(arith),
+        r: b.v3(arith, POSITION) - a.v3(arith, POSITION),
+        va,
+        vb,
+        wa,
+        wb,
+    }
+}
+
+impl<A: Widen> Source<A, SINGLE_LANES> for SingleView<'_> {
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.c[0].len()
+    }
+
+    #[inline(always)]
+    fn cut(self) -> Self {
+        let mut c = self.c;
+        let n = c[0].len();
+        for component in &mut c {
+            *component = &component[..n];
+        }
+        Self { c }
+    }
+
+    #[inline(always)]
+    fn gather<const DAMPED: bool>(
+        &self,
+        arith: A,
+        ends_of: &[(usize, usize, u8); SINGLE_LANES],
+    ) -> Ends<A, SINGLE_LANES> {
+        // Not a run of eight, but often two runs of four, or one (the interior of a body whose
+        // rows are not multiples of eight long): such a half is one 128-bit load.
+        let h = LANES;
+        match (run_of_four(ends_of, 0), run_of_four(ends_of, h)) {
+            (false, false) => {
+                let a = Gathered {
+                    view: self,
+                    index: |j: usize| ends_of[j].0,
+                };
+                let b = Gathered {
+                    view: self,
+                    index: |j: usize| ends_of[j].1,
+                };
+                ends::<A, DAMPED>(arith, a, b)
+            }
+            (true, true) => {
+                let (lo, hi) = (ends_of[0], ends_of[h]);
+                let a = Halves {
+                    view: self,
+                    lo: Run4(lo.0),
+                    hi: Run4(hi.0),
+                };
+                let b = Halves {
+                    view: self,
+                    lo: Run4(lo.1),
+                    hi: Run4(hi.1),
+                };
+                ends::<A, DAMPED>(arith, a, b)
+            }
+            (true, false) => {
+                let lo = ends_of[0];
+                let a = Halves {
+                    view: self,
+                    lo: Run4(lo.0),
+                    hi: gather4::<false>(ends_of, h),
+                };
+                let b = Halves {
+                    view: self,
+                    lo: Run4(lo.1),
+                    hi: gather4::<true>(ends_of, h),
+                };
+                ends::<A, DAMPED>(arith, a, b)
+            }
+            (false, true) => {
+                let hi = ends_of[h];
+                let a = Halves {
+                    view: self,
+                    lo: gather4::<false>(ends_of, 0),
+                    hi: Run4(hi.0),
+                };
+                let b = Halves {
+                    view: self,
+                    lo: gather4::<true>(ends_of, 0),
+                    hi: Run4(hi.1),
+                };
+                ends::<A, DAMPED>(arith, a, b)
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn gather_run<const DAMPED: bool>(
+        &self,
+        arith: A,
+        a0: usize,
+        b0: usize,
+    ) -> Ends<A, SINGLE_LANES> {
+        let (a, b) = (Block { view: self, i0: a0 }, Block { view: self, i0: b0 });
+        ends::<A, DAMPED>(arith, a, b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::link::{link_pass, link_pass_lanes, scatter_into};
+    use crate::dynamics::math::Quat;
+    use crate::dynamics::state::build_state;
+    use crate::material::{Material, MaterialId, Palette};
+    use crate::voxel::{GridDims, VoxelGrid};
+
+    /// A 9×3×2 block (runs of eight x-links, groups that are not runs, a partial last group and
+    /// a voxel count that is not a multiple of four) in a varied state: displaced by up to 1 mm
+    /// on 10 mm voxels, large rotations on some voxels, velocities, spins, and forces already
+    /// summed, so that the order in which links add to a voxel shows; everything moved by
+    /// `shift`.
+    fn state(shift: Vec3) -> (Voxels, Links) {
+        let grid = VoxelGrid::filled(GridDims::new(9, 3, 2), MaterialId(0));
+        let palette = Palette(vec![Material::new("m", 1.0e6, 0.35)]);
+        let (mut v, links) = build_state(&grid, &palette, 0.01, 0.5).unwrap();
+        assert_ne!(links.len() % SINGLE_LANES, 0);
+        assert_ne!(v.len() % LANES, 0);
+        for i in 0..v.len() {
+            let t = i as f64;
+            let wave =
+                |a: f64, b: f64, c: f64| Vec3::new((a * t).sin(), (b * t).cos(), (c * t).sin());
+            v.position[i] += wave(0.7, 1.3, 2.1) * 1e-3 + shift;
+            let angle = if i % 7 == 3 { 2.5 } else { 0.05 };
+            v.orientation[i] = Quat::from_rotation_vector(wave(0.3, 0.5, 0.9) * angle);
+            v.velocity[i] = wave(1.1, 0.2, 0.4) * 0.1;
+            v.angular_velocity[i] = wave(0.6, 1.7, 0.8) * 3.0;
+            v.force[i] = wave(0.2, 0.9, 1.4) * 10.0;
+            v.torque[i] = wave(1.6, 0.3, 0.7) * 0.1;
+        }
+        (v, links)
+    }
+
+    const STEP: LinkStep = LinkStep {
+        voxel_size: 0.01,
+        actuation_factor: 1.05,
+    };
+
+    /// The mixed pass on portable lanes, the copy written on portable lanes too; `RUNS` false
+    /// reads every group through the general gather.
+    fn portable<const RUNS: bool>(links: &Links, v: &mut Voxels) -> f64 {
+        let mut single = SingleCopy::new(links, v.len());
+        copy_lanes::<_, true>(
+            Portable,
+            CopyJob {
+                voxels: v,
+                state: &mut single.state,
+            },
+        );
+        let (_, out) = scatter_into(v);
+        let job = single.job(links, 0..links.len(), STEP, out);
+        link_pass_lanes::<_, _, _, SINGLE_LANES, true, true, RUNS>(Single(Portable), job)
+    }
+
+    fn mixed(links: &Links, v: &mut Voxels) -> f64 {
+        let mut single = SingleCopy::new(links, v.len());
+        single.copy_state::<true>(v);
+        crate::dynamics::link::link_pass_mixed::<true, true>(links, &single, v, STEP)
+    }
+
+    fn bits(w: &[Vec3]) -> Vec<[u64; 3]> {
+        w.iter()
+            .map(|u| [u.x.to_bits(), u.y.to_bits(), u.z.to_bits()])
+            .collect()
+    }
+
+    /// The largest difference between two voxels' sums, relative to the largest sum.
+    fn relative_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
+        let largest = a.iter().map(|u| u.norm()).fold(0.0, f64::max);
+        let worst = a
+            .iter()
+            .zip(b)
+            .map(|(u, w)| (*u - *w).norm())
+            .fold(0.0, f64::max);
+        worst / largest
+    }
+
+    /// The dispatched mixed pass (AVX2 where the CPU has it), the portable one, and the portable
+    /// one reading every group through the general gather give the same bits.
+    #[test]
+    fn dispatched_and_portable_single_kernels_agree_bit_for_bit() {
+        let (v, links) = state(Vec3::ZERO);
+        let (mut a, mut b, mut c) = (v.clone(), v.clone(), v.clone());
+        let strain_a = mixed(&links, &mut a);
+        let strain_b = portable::<true>(&links, &mut b);
+        let strain_c = portable::<false>(&links, &mut c);
+        assert_eq!(strain_a.to_bits(), strain_b.to_bits());
+        assert_eq!(strain_a.to_bits(), strain_c.to_bits());
+        for (x, y) in [(&a, &b), (&a, &c)] {
+            assert_eq!(bits(&x.force), bits(&y.force));
+            assert_eq!(bits(&x.torque), bits(&y.torque));
+        }
+        assert_ne!(bits(&a.torque), bits(&v.torque), "the pass added nothing");
+    }
+
+    /// The mixed pass computes the double pass's forces and moments to `f32` accuracy. The
+    /// tolerance, 1e-4 of the largest sum: rounding positions of up to 9 cm to `f32` (7.5e-9 m)
+    /// is 7.5e-6 of the ~1 mm deformations of this state, and each of the kernel's few dozen
+    /// dependent `f32` operations adds about 6e-8; a lane mix-up or a dropped term is an error of
+    /// order one.
+    #[test]
+    fn the_mixed_kernel_computes_the_double_kernels_loads() {
+        let (v, links) = state(Vec3::ZERO);
+        let (mut double, mut single) = (v.clone(), v.clone());
+        let strain_double = link_pass::<true, true>(&links, &mut double, STEP);
+        let strain_single = mixed(&links, &mut single);
+        assert!((strain_single - strain_double).abs() <= 1e-4 * strain_double);
+        let loads = |w: &Voxels, c: fn(&Voxels) -> &Vec<Vec3>| -> Vec<Vec3> {
+            c(w).iter().zip(c(&v)).map(|(u, u0)| *u - *u0).collect()
+        };
+        for (name, c) in [
+            (
+                "force",
+                (|w: &Voxels| &w.force) as fn(&Voxels) -> &Vec<Vec3>,
+            ),
+            ("torque", |w: &Voxels| &w.torque),
+        ] {
+            let e = relative_difference(&loads(&double, c), &loads(&single, c));
+            assert!(e < 1e-4, "{name}: relative difference {e:e}");
+        }
+    }
+
+    /// The copy holds positions relative to voxel 0, so a body 1 m from the origin gets the loads
+    /// it gets at the origin (to the `f64` rounding of the shifted positions, ~1e-16 m, which
+    /// `f32` rounds away almost everywhere). Rounding absolute positions instead would be off by
+    /// the `f32` spacing at 1 m, 6e-8 m, 6e-5 of the deformations: 60 times this tolerance.
+    #[test]
+    fn the_mixed_kernel_is_translation_invariant() {
+        let (here, links) = state(Vec3::ZERO);
+        let (there, _) = state(Vec3::new(1.0, -0.75, 0.5));
+        let (mut a, mut b) = (here.clone(), there.clone());
+        mixed(&links, &mut a);
+        mixed(&links, &mut b);
+        for (w, w0, name) in [
+            (&a.force, &here.force, "force"),
+            (&b.force, &there.force, "force, shifted"),
+        ] {
+            assert_ne!(bits(w), bits(w0), "{name}: the pass added nothing");
+        }
+        let less = |w: &[Vec3], w0: &[Vec3]| -> Vec<Vec3> {
+            w.iter().zip(w0).map(|(u, u0)| *u - *u0).collect()
+        };
+        let e = relative_difference(&less(&a.force, &here.force), &less(&b.force, &there.force));
+        assert!(e < 1e-6, "relative difference {e:e}");
+    }
+}
