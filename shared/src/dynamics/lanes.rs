@@ -92,69 +92,71 @@ pub trait Regroup: Arith<LANES, E = f64> {
 #[derive(Clone, Copy)]
 pub struct Portable;
 
-impl Portable {
-    #[inline(always)]
-    fn zip(a: [f64; LANES], b: [f64; LANES], f: impl Fn(f64, f64) -> f64) -> [f64; LANES] {
-        std::array::from_fn(|j| f(a[j], b[j]))
-    }
+/// `impl Arith<$lanes> for $token` on plain arrays of `$e`, lane by lane: the portable arithmetic of
+/// either precision ([`Portable`] here, `Single<Portable>` in `super::single`).
+macro_rules! portable_arith {
+    ($token:ty, $e:ty, $lanes:expr) => {
+        impl $crate::dynamics::lanes::Arith<{ $lanes }> for $token {
+            type E = $e;
+            type V = [$e; $lanes];
+            #[inline(always)]
+            fn splat(self, x: $e) -> Self::V {
+                [x; $lanes]
+            }
+            #[inline(always)]
+            fn vector(self, a: Self::V) -> Self::V {
+                a
+            }
+            #[inline(always)]
+            fn to_array(self, v: Self::V) -> Self::V {
+                v
+            }
+            #[inline(always)]
+            fn add(self, a: Self::V, b: Self::V) -> Self::V {
+                std::array::from_fn(|j| a[j] + b[j])
+            }
+            #[inline(always)]
+            fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+                std::array::from_fn(|j| a[j] - b[j])
+            }
+            #[inline(always)]
+            fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+                std::array::from_fn(|j| a[j] * b[j])
+            }
+            #[inline(always)]
+            fn div(self, a: Self::V, b: Self::V) -> Self::V {
+                std::array::from_fn(|j| a[j] / b[j])
+            }
+            #[inline(always)]
+            fn sqrt(self, a: Self::V) -> Self::V {
+                a.map(<$e>::sqrt)
+            }
+            #[inline(always)]
+            fn neg(self, a: Self::V) -> Self::V {
+                a.map(|a| -a)
+            }
+            #[inline(always)]
+            fn select_eq(self, key: Self::V, k: $e, a: Self::V, b: Self::V) -> Self::V {
+                std::array::from_fn(|j| if key[j] == k { a[j] } else { b[j] })
+            }
+            #[inline(always)]
+            fn select_negative(self, x: Self::V, a: Self::V, b: Self::V) -> Self::V {
+                std::array::from_fn(|j| if x[j] < 0.0 { a[j] } else { b[j] })
+            }
+            #[inline(always)]
+            fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
+                std::array::from_fn(|j| m[j].max(x[j].abs()))
+            }
+            #[inline(always)]
+            fn all_below(self, v: Self::V, k: $e) -> bool {
+                v.iter().all(|&x| x < k)
+            }
+        }
+    };
 }
+pub(super) use portable_arith;
 
-impl Arith<LANES> for Portable {
-    type E = f64;
-    type V = [f64; LANES];
-    #[inline(always)]
-    fn splat(self, x: f64) -> Self::V {
-        [x; LANES]
-    }
-    #[inline(always)]
-    fn vector(self, a: [f64; LANES]) -> Self::V {
-        a
-    }
-    #[inline(always)]
-    fn to_array(self, v: Self::V) -> [f64; LANES] {
-        v
-    }
-    #[inline(always)]
-    fn add(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a + b)
-    }
-    #[inline(always)]
-    fn sub(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a - b)
-    }
-    #[inline(always)]
-    fn mul(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a * b)
-    }
-    #[inline(always)]
-    fn div(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a / b)
-    }
-    #[inline(always)]
-    fn sqrt(self, a: Self::V) -> Self::V {
-        a.map(f64::sqrt)
-    }
-    #[inline(always)]
-    fn neg(self, a: Self::V) -> Self::V {
-        a.map(|a| -a)
-    }
-    #[inline(always)]
-    fn select_eq(self, key: Self::V, k: f64, a: Self::V, b: Self::V) -> Self::V {
-        std::array::from_fn(|j| if key[j] == k { a[j] } else { b[j] })
-    }
-    #[inline(always)]
-    fn select_negative(self, x: Self::V, a: Self::V, b: Self::V) -> Self::V {
-        std::array::from_fn(|j| if x[j] < 0.0 { a[j] } else { b[j] })
-    }
-    #[inline(always)]
-    fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
-        Self::zip(m, x, |m, x| m.max(x.abs()))
-    }
-    #[inline(always)]
-    fn all_below(self, v: Self::V, k: f64) -> bool {
-        v.iter().all(|&x| x < k)
-    }
-}
+portable_arith!(Portable, f64, LANES);
 
 impl Regroup for Portable {
     #[inline(always)]

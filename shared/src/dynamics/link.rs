@@ -476,58 +476,45 @@ pub struct LinkLoads<'a> {
     pub moment_b: &'a mut [Vec3],
 }
 
-/// Where the kernel puts a group of four links' results in `f64`: lane j is link k0 + j, `count`
-/// lanes are real.
+/// One group of links as the kernel read it: lane j is link `k0 + j` and joins the voxels
+/// `ends[j]` (a, b, axis); `count` lanes are real; `run` when they join consecutive voxels to
+/// consecutive voxels.
+#[derive(Clone, Copy)]
+pub(super) struct Group<'a, const L: usize> {
+    pub(super) k0: usize,
+    pub(super) count: usize,
+    pub(super) ends: &'a [(usize, usize, u8); L],
+    pub(super) run: bool,
+}
+
+/// A group's results: the force on each link's b end (its a end gets the opposite) and the
+/// moments on either end.
+#[derive(Clone, Copy)]
+pub(super) struct Loads<A: Arith<L>, const L: usize> {
+    pub(super) f_b: V3<A, L>,
+    pub(super) m_a: V3<A, L>,
+    pub(super) m_b: V3<A, L>,
+}
+
+/// Where the kernel puts the results of a group of four links in `f64`.
 pub(super) trait LinkOut {
     /// Cuts per-voxel outputs to the voxel count, so that the check of an index into the state
     /// also covers them (without it the kernel was 5 % slower).
     fn cut_to(&mut self, _voxels: usize) {}
 
-    #[allow(clippy::too_many_arguments)]
-    fn put<A: Regroup>(
-        &mut self,
-        k0: usize,
-        count: usize,
-        ends: &[(usize, usize, u8); LANES],
-        run: bool,
-        f_b: V3<A, LANES>,
-        m_a: V3<A, LANES>,
-        m_b: V3<A, LANES>,
-    );
+    fn put<A: Regroup>(&mut self, group: Group<LANES>, loads: Loads<A, LANES>);
 }
 
 /// A kernel's arithmetic, with the way its results reach a [`LinkOut`].
 pub(super) trait Kernel<const L: usize>: Arith<L> {
-    /// Hands a group's results (lane j is link k0 + j, `count` lanes real; `run` as the kernel
-    /// found it) to `out`, group by group of four `f64` lanes in link order.
-    #[allow(clippy::too_many_arguments)]
-    fn put<O: LinkOut>(
-        self,
-        out: &mut O,
-        k0: usize,
-        count: usize,
-        ends: &[(usize, usize, u8); L],
-        run: bool,
-        f_b: V3<Self, L>,
-        m_a: V3<Self, L>,
-        m_b: V3<Self, L>,
-    );
+    /// Hands a group's results to `out`, four `f64` lanes at a time in link order.
+    fn put<O: LinkOut>(self, out: &mut O, group: Group<L>, loads: Loads<Self, L>);
 }
 
 impl<A: Regroup> Kernel<LANES> for A {
     #[inline(always)]
-    fn put<O: LinkOut>(
-        self,
-        out: &mut O,
-        k0: usize,
-        count: usize,
-        ends: &[(usize, usize, u8); LANES],
-        run: bool,
-        f_b: V3<Self, LANES>,
-        m_a: V3<Self, LANES>,
-        m_b: V3<Self, LANES>,
-    ) {
-        out.put(k0, count, ends, run, f_b, m_a, m_b);
+    fn put<O: LinkOut>(self, out: &mut O, group: Group<LANES>, loads: Loads<Self, LANES>) {
+        out.put(group, loads);
     }
 }
 
@@ -545,21 +532,13 @@ impl LinkOut for Scatter<'_> {
     }
 
     #[inline(always)]
-    fn put<A: Regroup>(
-        &mut self,
-        _k0: usize,
-        count: usize,
-        ends: &[(usize, usize, u8); LANES],
-        run: bool,
-        f_b: V3<A, LANES>,
-        m_a: V3<A, LANES>,
-        m_b: V3<A, LANES>,
-    ) {
+    fn put<A: Regroup>(&mut self, group: Group<LANES>, loads: Loads<A, LANES>) {
         let (force, torque) = (&mut *self.force, &mut *self.torque);
-        if run {
+        let Loads { f_b, m_a, m_b } = loads;
+        if group.run {
             // Each voxel still sums in link order: a voxel that ends one link of the run as b
             // and a later one as a gets the earlier link's force first.
-            let (a0, b0) = (ends[0].0, ends[0].1);
+            let (a0, b0) = (group.ends[0].0, group.ends[0].1);
             let block = |i0: usize| i0..i0 + LANES;
             f_b.add_to::<false>(&mut force[block(b0)]);
             f_b.add_to::<true>(&mut force[block(a0)]);
@@ -567,7 +546,7 @@ impl LinkOut for Scatter<'_> {
             m_a.add_to::<false>(&mut torque[block(a0)]);
         } else {
             let (f_b, m_a, m_b) = (f_b.lanes(), m_a.lanes(), m_b.lanes());
-            for (j, &(ia, ib, _)) in ends.iter().enumerate().take(count) {
+            for (j, &(ia, ib, _)) in group.ends.iter().enumerate().take(group.count) {
                 force[ib] += f_b[j];
                 force[ia] -= f_b[j];
                 torque[ia] += m_a[j];
@@ -585,22 +564,14 @@ struct Store<'a> {
 
 impl LinkOut for Store<'_> {
     #[inline(always)]
-    fn put<A: Regroup>(
-        &mut self,
-        k0: usize,
-        count: usize,
-        _ends: &[(usize, usize, u8); LANES],
-        _run: bool,
-        f_b: V3<A, LANES>,
-        m_a: V3<A, LANES>,
-        m_b: V3<A, LANES>,
-    ) {
+    fn put<A: Regroup>(&mut self, group: Group<LANES>, loads: Loads<A, LANES>) {
+        let (k0, count) = (group.k0, group.count);
         let slots = k0 - self.first..k0 - self.first + count;
         let l = &mut self.loads;
         for (v, out) in [
-            (f_b, &mut *l.force_b),
-            (m_a, &mut *l.moment_a),
-            (m_b, &mut *l.moment_b),
+            (loads.f_b, &mut *l.force_b),
+            (loads.m_a, &mut *l.moment_a),
+            (loads.m_b, &mut *l.moment_b),
         ] {
             let out = &mut out[slots.clone()];
             if count == LANES {
@@ -921,7 +892,13 @@ pub(super) fn link_pass_lanes<
         let m_a = m_sym + c;
         let m_b = c - m_sym;
 
-        arith.put(&mut out, k0, count, &ends, run, f_b, m_a, m_b);
+        let group = Group {
+            k0,
+            count,
+            ends: &ends,
+            run,
+        };
+        arith.put(&mut out, group, Loads { f_b, m_a, m_b });
         k0 += L;
     }
     max_strain

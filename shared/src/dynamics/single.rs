@@ -19,8 +19,10 @@
 
 use pulp::Simd;
 
-use super::lanes::{Arith, LANES, Lanes, Portable, Regroup, load_columns3, load_columns4};
-use super::link::{Ends, Job, Kernel, LinkConstants, LinkOut, LinkStep, Source, V3};
+use super::lanes::{
+    Arith, LANES, Lanes, Portable, Regroup, load_columns3, load_columns4, portable_arith,
+};
+use super::link::{Ends, Group, Job, Kernel, LinkConstants, LinkOut, LinkStep, Loads, Source, V3};
 use super::math::Vec3;
 use super::state::{Links, Voxels};
 
@@ -42,69 +44,7 @@ pub(super) trait Widen: Arith<SINGLE_LANES, E = f32> {
     fn join(self, lo: [f32; LANES], hi: [f32; LANES]) -> Self::V;
 }
 
-impl Single<Portable> {
-    #[inline(always)]
-    fn zip(a: [f32; 8], b: [f32; 8], f: impl Fn(f32, f32) -> f32) -> [f32; 8] {
-        std::array::from_fn(|j| f(a[j], b[j]))
-    }
-}
-
-impl Arith<SINGLE_LANES> for Single<Portable> {
-    type E = f32;
-    type V = [f32; SINGLE_LANES];
-    #[inline(always)]
-    fn splat(self, x: f32) -> Self::V {
-        [x; SINGLE_LANES]
-    }
-    #[inline(always)]
-    fn vector(self, a: Self::V) -> Self::V {
-        a
-    }
-    #[inline(always)]
-    fn to_array(self, v: Self::V) -> Self::V {
-        v
-    }
-    #[inline(always)]
-    fn add(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a + b)
-    }
-    #[inline(always)]
-    fn sub(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a - b)
-    }
-    #[inline(always)]
-    fn mul(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a * b)
-    }
-    #[inline(always)]
-    fn div(self, a: Self::V, b: Self::V) -> Self::V {
-        Self::zip(a, b, |a, b| a / b)
-    }
-    #[inline(always)]
-    fn sqrt(self, a: Self::V) -> Self::V {
-        a.map(f32::sqrt)
-    }
-    #[inline(always)]
-    fn neg(self, a: Self::V) -> Self::V {
-        a.map(|a| -a)
-    }
-    #[inline(always)]
-    fn select_eq(self, key: Self::V, k: f32, a: Self::V, b: Self::V) -> Self::V {
-        std::array::from_fn(|j| if key[j] == k { a[j] } else { b[j] })
-    }
-    #[inline(always)]
-    fn select_negative(self, x: Self::V, a: Self::V, b: Self::V) -> Self::V {
-        std::array::from_fn(|j| if x[j] < 0.0 { a[j] } else { b[j] })
-    }
-    #[inline(always)]
-    fn max_abs(self, m: Self::V, x: Self::V) -> Self::V {
-        Self::zip(m, x, |m, x| m.max(x.abs()))
-    }
-    #[inline(always)]
-    fn all_below(self, v: Self::V, k: f32) -> bool {
-        v.iter().all(|&x| x < k)
-    }
-}
+portable_arith!(Single<Portable>, f32, SINGLE_LANES);
 
 impl Widen for Single<Portable> {
     type Wide = Portable;
@@ -219,31 +159,40 @@ where
     fn put<O: LinkOut>(
         self,
         out: &mut O,
-        k0: usize,
-        count: usize,
-        ends: &[(usize, usize, u8); SINGLE_LANES],
-        _run: bool,
-        f_b: V3<Self, SINGLE_LANES>,
-        m_a: V3<Self, SINGLE_LANES>,
-        m_b: V3<Self, SINGLE_LANES>,
+        group: Group<SINGLE_LANES>,
+        loads: Loads<Self, SINGLE_LANES>,
     ) {
         // Both halves of each component, converted once (in functions, not closures: a closure
         // is compiled without the vector instructions of the function around it).
-        let (f_b, m_a, m_b) = (halves(self, f_b), halves(self, m_a), halves(self, m_b));
+        let (f_b, m_a, m_b) = (
+            halves(self, loads.f_b),
+            halves(self, loads.m_a),
+            halves(self, loads.m_b),
+        );
         for h in 0..SINGLE_LANES / LANES {
             let first = LANES * h;
-            if count <= first {
+            if group.count <= first {
                 break;
             }
-            let real = (count - first).min(LANES);
-            let mut e = [(0, 0, 0); LANES];
-            e.copy_from_slice(&ends[first..first + LANES]);
+            let mut ends = [(0, 0, 0); LANES];
+            ends.copy_from_slice(&group.ends[first..first + LANES]);
             // Four consecutive voxels linked to four: added as blocks, as the double kernel does.
-            let mut run = real == LANES;
-            for (j, &(a, b, _)) in e.iter().enumerate() {
-                run &= a == e[0].0 + j && b == e[0].1 + j;
+            let mut run = group.count >= first + LANES;
+            for (j, &(a, b, _)) in ends.iter().enumerate() {
+                run &= a == ends[0].0 + j && b == ends[0].1 + j;
             }
-            out.put(k0 + first, real, &e, run, f_b[h], m_a[h], m_b[h]);
+            let half = Group {
+                k0: group.k0 + first,
+                count: (group.count - first).min(LANES),
+                ends: &ends,
+                run,
+            };
+            let loads = Loads {
+                f_b: f_b[h],
+                m_a: m_a[h],
+                m_b: m_b[h],
+            };
+            out.put(half, loads);
         }
     }
 }
