@@ -943,11 +943,30 @@ pub fn link_energy(links: &Links, voxels: &Voxels, step: LinkStep) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::dynamics::state::build_state;
     use crate::material::{Material, MaterialId, Palette};
     use crate::voxel::{GridDims, VoxelGrid};
+
+    /// A varied state for the kernels' tests: positions moved by up to 1 mm (and by `shift`),
+    /// small rotations and, on every seventh voxel, 2.5 rad ones (the `atan2` lanes), velocities,
+    /// spins, and forces and torques already summed, so that the order in which links add to a
+    /// voxel shows.
+    pub(in crate::dynamics) fn vary(v: &mut Voxels, shift: Vec3) {
+        for i in 0..v.len() {
+            let t = i as f64;
+            let wave =
+                |a: f64, b: f64, c: f64| Vec3::new((a * t).sin(), (b * t).cos(), (c * t).sin());
+            v.position[i] += wave(0.7, 1.3, 2.1) * 1e-3 + shift;
+            let angle = if i % 7 == 3 { 2.5 } else { 0.05 };
+            v.orientation[i] = Quat::from_rotation_vector(wave(0.3, 0.5, 0.9) * angle);
+            v.velocity[i] = wave(1.1, 0.2, 0.4) * 0.1;
+            v.angular_velocity[i] = wave(0.6, 1.7, 0.8) * 3.0;
+            v.force[i] = wave(0.2, 0.9, 1.4) * 10.0;
+            v.torque[i] = wave(1.6, 0.3, 0.7) * 0.1;
+        }
+    }
 
     /// The dispatched pass (explicit AVX2 vectors where the CPU has them) and the portable lane
     /// kernel give the same bits, large rotations (the `atan2` lanes) and a partial last group
@@ -971,19 +990,7 @@ mod tests {
             runs > 0 && runs < links.len() / LANES,
             "runs and other groups both"
         );
-        for i in 0..v.len() {
-            let t = i as f64;
-            let wave =
-                |a: f64, b: f64, c: f64| Vec3::new((a * t).sin(), (b * t).cos(), (c * t).sin());
-            v.position[i] += wave(0.7, 1.3, 2.1) * 1e-3;
-            let angle = if i % 7 == 3 { 2.5 } else { 0.05 };
-            v.orientation[i] = Quat::from_rotation_vector(wave(0.3, 0.5, 0.9) * angle);
-            v.velocity[i] = wave(1.1, 0.2, 0.4) * 0.1;
-            v.angular_velocity[i] = wave(0.6, 1.7, 0.8) * 3.0;
-            // Sums already there, so that the order in which links add to a voxel shows.
-            v.force[i] = wave(0.2, 0.9, 1.4) * 10.0;
-            v.torque[i] = wave(1.6, 0.3, 0.7) * 0.1;
-        }
+        vary(&mut v, Vec3::ZERO);
         let step = LinkStep {
             voxel_size: 0.01,
             actuation_factor: 1.05,

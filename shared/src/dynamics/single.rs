@@ -642,35 +642,22 @@ impl<A: Widen> Source<A, SINGLE_LANES> for SingleView<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dynamics::link::tests::vary;
     use crate::dynamics::link::{link_pass, link_pass_lanes, scatter_into};
-    use crate::dynamics::math::Quat;
     use crate::dynamics::state::build_state;
     use crate::material::{Material, MaterialId, Palette};
     use crate::voxel::{GridDims, VoxelGrid};
 
-    /// A 9×3×2 block (runs of eight x-links, groups that are not runs, a partial last group and
-    /// a voxel count that is not a multiple of four) in a varied state: displaced by up to 1 mm
-    /// on 10 mm voxels, large rotations on some voxels, velocities, spins, and forces already
-    /// summed, so that the order in which links add to a voxel shows; everything moved by
-    /// `shift`.
+    /// A 9×3×2 block of 10 mm voxels (runs of eight x-links, groups that are not runs, a
+    /// partial last group and a voxel count that is not a multiple of four) in the varied state
+    /// of the double kernel's tests, everything moved by `shift`.
     fn state(shift: Vec3) -> (Voxels, Links) {
         let grid = VoxelGrid::filled(GridDims::new(9, 3, 2), MaterialId(0));
         let palette = Palette(vec![Material::new("m", 1.0e6, 0.35)]);
         let (mut v, links) = build_state(&grid, &palette, 0.01, 0.5).unwrap();
         assert_ne!(links.len() % SINGLE_LANES, 0);
         assert_ne!(v.len() % LANES, 0);
-        for i in 0..v.len() {
-            let t = i as f64;
-            let wave =
-                |a: f64, b: f64, c: f64| Vec3::new((a * t).sin(), (b * t).cos(), (c * t).sin());
-            v.position[i] += wave(0.7, 1.3, 2.1) * 1e-3 + shift;
-            let angle = if i % 7 == 3 { 2.5 } else { 0.05 };
-            v.orientation[i] = Quat::from_rotation_vector(wave(0.3, 0.5, 0.9) * angle);
-            v.velocity[i] = wave(1.1, 0.2, 0.4) * 0.1;
-            v.angular_velocity[i] = wave(0.6, 1.7, 0.8) * 3.0;
-            v.force[i] = wave(0.2, 0.9, 1.4) * 10.0;
-            v.torque[i] = wave(1.6, 0.3, 0.7) * 0.1;
-        }
+        vary(&mut v, shift);
         (v, links)
     }
 
