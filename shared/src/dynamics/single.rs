@@ -177,10 +177,7 @@ where
             let mut ends = [(0, 0, 0); LANES];
             ends.copy_from_slice(&group.ends[first..first + LANES]);
             // Four consecutive voxels linked to four: added as blocks, as the double kernel does.
-            let mut run = group.count >= first + LANES;
-            for (j, &(a, b, _)) in ends.iter().enumerate() {
-                run &= a == ends[0].0 + j && b == ends[0].1 + j;
-            }
+            let run = group.count >= first + LANES && run_of_four(group.ends, first);
             let half = Group {
                 k0: group.k0 + first,
                 count: (group.count - first).min(LANES),
@@ -432,20 +429,6 @@ trait Read<A: Arith<SINGLE_LANES, E = f32>> {
     }
 }
 
-/// Voxels `index(j)`, gathered lane by lane.
-struct Gathered<'a, F> {
-    view: &'a SingleView<'a>,
-    index: F,
-}
-
-impl<A: Arith<SINGLE_LANES, E = f32>, F: Fn(usize) -> usize> Read<A> for Gathered<'_, F> {
-    #[inline(always)]
-    fn lanes(&self, arith: A, k: usize) -> Lanes<A, SINGLE_LANES> {
-        let c = self.view.c[k];
-        Lanes::from_fn(arith, |j| c[(self.index)(j)])
-    }
-}
-
 /// Voxels `i0..i0 + 8`, read as one vector per component.
 struct Block<'a> {
     view: &'a SingleView<'a>,
@@ -514,11 +497,43 @@ fn run_of_four(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> bool {
     run
 }
 
-/// The a (`B` false) or b ends of links `h..h + 4`, gathered.
+/// The a and b ends of links `h..h + 4`, a run of four.
 #[inline(always)]
-fn gather4<const B: bool>(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> Gather4 {
-    let end = |j: usize| if B { ends[h + j].1 } else { ends[h + j].0 };
-    Gather4([end(0), end(1), end(2), end(3)])
+fn run4(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> (Run4, Run4) {
+    (Run4(ends[h].0), Run4(ends[h].1))
+}
+
+/// The a and b ends of links `h..h + 4`, gathered.
+#[inline(always)]
+fn gather4(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> (Gather4, Gather4) {
+    let e = |j: usize| ends[h + j];
+    let (e0, e1, e2, e3) = (e(0), e(1), e(2), e(3));
+    (
+        Gather4([e0.0, e1.0, e2.0, e3.0]),
+        Gather4([e0.1, e1.1, e2.1, e3.1]),
+    )
+}
+
+/// What the kernel reads of eight links whose halves `lo` and `hi` (a and b ends each) are runs
+/// of four or gathered.
+#[inline(always)]
+fn half_ends<A: Widen, Lo: ReadHalf, Hi: ReadHalf, const DAMPED: bool>(
+    arith: A,
+    view: &SingleView,
+    lo: (Lo, Lo),
+    hi: (Hi, Hi),
+) -> Ends<A, SINGLE_LANES> {
+    let a = Halves {
+        view,
+        lo: lo.0,
+        hi: hi.0,
+    };
+    let b = Halves {
+        view,
+        lo: lo.1,
+        hi: hi.1,
+    };
+    ends::<A, DAMPED>(arith, a, b)
 }
 
 /// What the kernel reads of the links from the voxels `a` reads to those `b` reads.
@@ -572,57 +587,16 @@ impl<A: Widen> Source<A, SINGLE_LANES> for SingleView<'_> {
         let h = LANES;
         match (run_of_four(ends_of, 0), run_of_four(ends_of, h)) {
             (false, false) => {
-                let a = Gathered {
-                    view: self,
-                    index: |j: usize| ends_of[j].0,
-                };
-                let b = Gathered {
-                    view: self,
-                    index: |j: usize| ends_of[j].1,
-                };
-                ends::<A, DAMPED>(arith, a, b)
+                half_ends::<A, _, _, DAMPED>(arith, self, gather4(ends_of, 0), gather4(ends_of, h))
             }
             (true, true) => {
-                let (lo, hi) = (ends_of[0], ends_of[h]);
-                let a = Halves {
-                    view: self,
-                    lo: Run4(lo.0),
-                    hi: Run4(hi.0),
-                };
-                let b = Halves {
-                    view: self,
-                    lo: Run4(lo.1),
-                    hi: Run4(hi.1),
-                };
-                ends::<A, DAMPED>(arith, a, b)
+                half_ends::<A, _, _, DAMPED>(arith, self, run4(ends_of, 0), run4(ends_of, h))
             }
             (true, false) => {
-                let lo = ends_of[0];
-                let a = Halves {
-                    view: self,
-                    lo: Run4(lo.0),
-                    hi: gather4::<false>(ends_of, h),
-                };
-                let b = Halves {
-                    view: self,
-                    lo: Run4(lo.1),
-                    hi: gather4::<true>(ends_of, h),
-                };
-                ends::<A, DAMPED>(arith, a, b)
+                half_ends::<A, _, _, DAMPED>(arith, self, run4(ends_of, 0), gather4(ends_of, h))
             }
             (false, true) => {
-                let hi = ends_of[h];
-                let a = Halves {
-                    view: self,
-                    lo: gather4::<false>(ends_of, 0),
-                    hi: Run4(hi.0),
-                };
-                let b = Halves {
-                    view: self,
-                    lo: gather4::<true>(ends_of, 0),
-                    hi: Run4(hi.1),
-                };
-                ends::<A, DAMPED>(arith, a, b)
+                half_ends::<A, _, _, DAMPED>(arith, self, gather4(ends_of, 0), run4(ends_of, h))
             }
         }
     }
