@@ -14,7 +14,7 @@
 # --set search.islands=16`: a value that is not TOML is taken as a string; a missing key or section
 # is added), sets `budget.target_rms_percent`, and runs the seeds one after
 # another; start two `run`s to use two cores. `resume` finishes every run of <out> that a stop cut
-# short (one without summary.json), <n> at a time: it points the run's config at <out> (so a study
+# short (one without summary.json, or whose summary says it was stopped), <n> at a time: it points the run's config at <out> (so a study
 # copied from another machine or folder resumes where it now lies), then continues the run from its
 # store with `--resume`, the bits it would have had uninterrupted, or starts it again if it stopped
 # before writing one. `table` prints one markdown row per run from its
@@ -105,7 +105,7 @@ resume() {
     mkdir -p "$out/logs"
     for file in "$out"/configs/*.toml; do
         name=$(basename "$file" .toml)
-        [[ -f $out/$name/summary.json ]] && continue
+        finished "$out/$name" && continue
         sed -i -E "s|^results_dir[[:space:]]*=.*|results_dir = \"$here\"|" "$file"
         mode=--fresh
         [[ -f $out/$name/run.sqlite ]] && mode=--resume
@@ -118,6 +118,12 @@ resume() {
         ) &
     done
     wait
+}
+
+# Whether a run ended on its own: a summary.json that is not a stop's (a coordinator asked to stop,
+# by SIGTERM or ^C, writes one with `"stop": "shutdown"` and resumes from its store like any other).
+finished() {
+    [[ -f $1/summary.json ]] && ! grep -Eq '"stop":[[:space:]]*"shutdown"' "$1/summary.json"
 }
 
 # Rewrites `key = …` inside `[section]` of a config in place, for each `section.key=value`; the
