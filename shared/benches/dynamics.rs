@@ -7,10 +7,11 @@
 //!   of the paper's, one the largest of 20), timed;
 //! - `min`: the per-pass table and the blocks as the *minimum* time per step over many short
 //!   repetitions, robust to a machine shared with other jobs (use it for before/after tables);
+//! - `robot`: the per-pass table of `min` on the `eval` mode's paper-sized robot;
 //! - `study`: the error-against-run-time study: CSV and a PNG plot under
 //!   `$CARGO_TARGET_DIR/dynamics-study/` (or `target/dynamics-study/`).
 //!
-//! With `mixed` among the arguments every scene of the `min`, `threads` and `eval` modes runs the
+//! With `mixed` among the arguments every scene of the `min`, `robot`, `threads` and `eval` modes runs the
 //! mixed-precision link kernel (`LinkPrecision::Mixed`) instead of the double one.
 
 use std::hint::black_box;
@@ -237,17 +238,52 @@ fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
     }
 }
 
-/// The `eval` mode: paper-style evaluations of two random robots from 20 seeds, the one closest
-/// in size to the paper's 3,544-voxel robot (the reference engine's 178 s) and the largest; with
-/// `--threads N` each runs inside a pool of N threads; `only` picks one of the two by name.
-fn paper_evaluation(threads: Option<usize>, only: Option<&str>) {
+/// The `eval` mode's two robots of the 20 seeds: the one closest in size to the paper's
+/// 3,544-voxel robot, and the largest.
+fn eval_robots() -> (VoxelGrid, VoxelGrid) {
     let robots: Vec<VoxelGrid> = (0..20).map(paper_robot).collect();
     let paper_sized = robots
         .iter()
         .min_by_key(|g| g.filled_count().abs_diff(3544))
         .unwrap();
     let largest = robots.iter().max_by_key(|g| g.filled_count()).unwrap();
-    for (name, grid) in [("paper-sized", paper_sized), ("largest", largest)] {
+    (paper_sized.clone(), largest.clone())
+}
+
+/// The `robot` mode: the `min` table's passes on the `eval` mode's paper-sized robot, actuated
+/// on the floor after 2,000 steps, so that each pass is priced on the body the 20³ evaluation
+/// target is about (its fill, its runs of consecutive voxels) and not on a full block.
+fn robot_table() {
+    let scene = DynamicScene {
+        link_precision: precision(),
+        ..DynamicScene::paper_locomotion()
+    };
+    let mut full = Simulation::new(&eval_robots().0, &foam_palette(), &scene).unwrap();
+    full.start_actuation();
+    full.run_steps(2000).unwrap();
+    let (voxels, links) = (full.voxel_count(), full.link_count());
+    println!(
+        "paper-sized robot: {voxels} voxels, {links} links, {:?} kernel",
+        precision()
+    );
+    for (name, passes) in pass_cases(&full) {
+        let mut sim = full.clone();
+        sim.set_passes(passes);
+        let t = min_step_time(&mut sim, 20);
+        println!(
+            "{name:<24} {t:9.1} µs  {:6.1} ns/voxel  {:6.1} ns/link",
+            t * 1e3 / voxels as f64,
+            t * 1e3 / links as f64
+        );
+    }
+}
+
+/// The `eval` mode: paper-style evaluations of two random robots from 20 seeds, the one closest
+/// in size to the paper's 3,544-voxel robot (the reference engine's 178 s) and the largest; with
+/// `--threads N` each runs inside a pool of N threads; `only` picks one of the two by name.
+fn paper_evaluation(threads: Option<usize>, only: Option<&str>) {
+    let (paper_sized, largest) = eval_robots();
+    for (name, grid) in [("paper-sized", &paper_sized), ("largest", &largest)] {
         if only.is_some_and(|o| o != name) {
             continue;
         }
@@ -292,6 +328,10 @@ fn main() {
     }
     if args.iter().any(|a| a == "min") {
         min_table();
+        return;
+    }
+    if args.iter().any(|a| a == "robot") {
+        robot_table();
         return;
     }
     let numbers =
