@@ -1,10 +1,12 @@
 //! The run configuration: a TOML file read strictly (unknown keys are errors) and validated into a
 //! [`RunConfig`] before anything runs. Every error is one line naming the key.
 
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 use amorph::genome::MutationParams;
 use amorph::task::Scene;
+use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
@@ -156,13 +158,22 @@ impl RunConfig {
     /// Parses and validates config text; `path` only names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         let raw: RawConfig = toml::from_str(text).map_err(|e| {
-            let line = e.span().map_or(0, |s| {
-                text[..s.start.min(text.len())].matches('\n').count() + 1
-            });
+            let e = scene_error(text, &e).unwrap_or(e);
+            let start = e.span().map_or(0, |s| s.start.min(text.len()));
+            let line = text[..start].matches('\n').count() + 1;
+            // The line's own text names the key (or the table) the message is about.
+            let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+            let at = text[line_start..].lines().next().unwrap_or("").trim();
+            let at: String = at.chars().take(80).collect();
+            let message = e.message().replace('\n', " ");
             ConfigError::Parse {
                 path: path.to_owned(),
                 line,
-                message: e.message().replace('\n', " "),
+                message: if at.is_empty() {
+                    message
+                } else {
+                    format!("`{at}`: {message}")
+                },
             }
         })?;
         Self::try_from_raw(raw, path)
@@ -189,6 +200,59 @@ impl RunConfig {
     /// The folder this run writes its results into.
     pub fn run_dir(&self) -> PathBuf {
         self.raw.results_dir.join(&self.raw.name)
+    }
+}
+
+/// The error of reading `[scene]` again as the scene its `kind` names, where it is `original`'s
+/// (the same message): the same error at its key's place instead of the `[scene]` line (see
+/// [`Scene::deserialize_kind`]). `None` where that reading succeeds, finds another error, or the
+/// text has no scene kind.
+fn scene_error(text: &str, original: &toml::de::Error) -> Option<toml::de::Error> {
+    let table: toml::Table = text.parse().ok()?;
+    let kind = table.get("scene")?.get("kind")?.as_str()?;
+    let document = toml::Deserializer::parse(text).ok()?;
+    let error = SceneEntry(kind).deserialize(document).err()?;
+    (error.span().is_some() && error.message() == original.message()).then_some(error)
+}
+
+/// A config's `scene` entry read with [`Scene::deserialize_kind`], every other entry skipped.
+struct SceneEntry<'k>(&'k str);
+
+impl<'de> DeserializeSeed<'de> for SceneEntry<'_> {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, document: D) -> std::result::Result<(), D::Error> {
+        document.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for SceneEntry<'_> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a run config")
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> std::result::Result<(), A::Error> {
+        while let Some(key) = map.next_key::<String>()? {
+            if key == "scene" {
+                map.next_value_seed(SceneOfKind(self.0))?;
+            } else {
+                map.next_value::<IgnoredAny>()?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The `scene` table read as the scene of one kind.
+struct SceneOfKind<'k>(&'k str);
+
+impl<'de> DeserializeSeed<'de> for SceneOfKind<'_> {
+    type Value = Scene;
+
+    fn deserialize<D: Deserializer<'de>>(self, table: D) -> std::result::Result<Scene, D::Error> {
+        Scene::deserialize_kind(self.0, table)
     }
 }
 
@@ -357,6 +421,67 @@ target = "straight"
             .unwrap_err()
             .to_string();
         assert!(err.contains("wavy"), "{err}");
+    }
+
+    /// A bad value inside `[scene]` used to be reported at the `[scene]` line without its key:
+    /// serde reads the tagged scene through a buffer that forgets positions.
+    #[test]
+    fn a_bad_value_inside_the_scene_is_reported_at_its_own_line_and_key() {
+        let locomotion = "name = \"t\"\n[budget]\nevaluations = 100\n[resolution]\n\
+                          levels = [[6, 6, 6]]\n[scene]\nkind = \"locomotion\"\n\
+                          actuation_cycles = 4\n[scene.dynamics]\nlink_precision = \"mixed\"\n";
+        RunConfig::parse(locomotion, Path::new("t.toml")).unwrap();
+        // (text, its bad line, the key named, words of serde's message)
+        let cases = [
+            (
+                locomotion.replace("\"mixed\"", "\"single\""),
+                10,
+                "link_precision",
+                "unknown variant `single`",
+            ),
+            (
+                locomotion.replace("actuation_cycles = 4", "actuation_cycles = \"four\""),
+                8,
+                "actuation_cycles",
+                "invalid type",
+            ),
+            (
+                locomotion.replace("\"mixed\"\n", "\"mixed\"\nvoxel_sise = 1.0\n"),
+                11,
+                "voxel_sise",
+                "unknown field",
+            ),
+            (
+                MINIMAL.replace(
+                    "target = \"straight\"",
+                    "target = \"straight\"\nload = \"heavy\"",
+                ),
+                10,
+                "load",
+                "",
+            ),
+        ];
+        for (text, line, key, words) in cases {
+            let err = RunConfig::parse(&text, Path::new("t.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.starts_with(&format!("config t.toml, line {line}: `{key}")),
+                "{err}"
+            );
+            assert!(err.contains(words) && !err.contains('\n'), "{err}");
+        }
+        // An error outside the scene keeps its own place while the scene is sound.
+        let err = RunConfig::parse(
+            &locomotion.replace("evaluations = 100", "evaluations = \"many\""),
+            Path::new("t.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.starts_with("config t.toml, line 3: `evaluations"),
+            "{err}"
+        );
     }
 
     /// Issue 12, item 4: sizes that overflowed passed validation, then panicked or aborted.

@@ -155,7 +155,7 @@ floor = { incline = 2.0 }
 
 /// The link kernel's precision is a dynamics key (issue 14): `mixed` reads as the mixed-precision
 /// kernel and what the run writes back reads the same; a value that is not a precision is one
-/// line naming the file and the values it may take; a config without it is the double kernel and
+/// line naming the file, the key's line and the values it may take; a config without it is the double kernel and
 /// writes no such key.
 #[test]
 fn the_link_precision_is_a_dynamics_key() {
@@ -177,10 +177,16 @@ fn the_link_precision_is_a_dynamics_key() {
     let err = RunConfig::parse(&single, Path::new("single.toml"))
         .unwrap_err()
         .to_string();
-    // The scene is read as one table, so the line is the `[scene]` table's.
+    // The key's own line and text (session 32; it was the `[scene]` table's line before).
+    let line = single
+        .lines()
+        .position(|l| l.starts_with("link_precision"))
+        .unwrap()
+        + 1;
     assert!(
-        err.starts_with("config single.toml, line ")
-            && err.contains("unknown variant `single`")
+        err.starts_with(&format!(
+            "config single.toml, line {line}: `link_precision = \"single\"`"
+        )) && err.contains("unknown variant `single`")
             && err.contains("`mixed`")
             && !err.contains('\n'),
         "{err}"

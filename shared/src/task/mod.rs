@@ -11,6 +11,7 @@
 pub mod beam;
 pub mod cantilever;
 mod error;
+mod kindless;
 pub mod locomotion;
 pub mod memory;
 pub mod stiffness;
@@ -194,6 +195,19 @@ macro_rules! tasks {
         }
 
         impl Scene {
+            /// Reads the scene `kind` names from its table, whose `kind` key is skipped: for error
+            /// messages that name the bad key's line, which reading [`Scene`] itself cannot give
+            /// (see [`kindless`]). A config is still read as [`Scene`].
+            pub fn deserialize_kind<'de, D: serde::Deserializer<'de>>(
+                kind: &str,
+                table: D,
+            ) -> Result<Self, D::Error> {
+                match kind {
+                    $($kind => <$scene as Deserialize>::deserialize(kindless::Kindless(table)).map(Scene::$variant),)+
+                    other => Err(<D::Error as serde::de::Error>::unknown_variant(other, &[$($kind),+])),
+                }
+            }
+
             /// The `kind` of this scene in configs.
             pub fn kind(&self) -> &'static str {
                 match self {
