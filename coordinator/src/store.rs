@@ -468,6 +468,28 @@ impl RunStore {
         })
     }
 
+    /// The run's evaluation count at the end of every recorded epoch, by epoch.
+    pub fn epoch_evaluations(&self) -> Result<HashMap<usize, u64>> {
+        let rows: Vec<(i64, i64)> = self.with(|c| {
+            let mut stmt = c.prepare("SELECT epoch, evaluations FROM epoch")?;
+            let rows = stmt
+                .query_map([], |r| Ok((r.get(0)?, r.get(1)?)))?
+                .collect::<rusqlite::Result<Vec<_>>>()?;
+            Ok(rows)
+        })?;
+        rows.into_iter()
+            .map(
+                |(epoch, n)| match (usize::try_from(epoch), u64::try_from(n)) {
+                    (Ok(epoch), Ok(n)) => Ok((epoch, n)),
+                    _ => Err(StoreError::Corrupt {
+                        path: self.path.clone(),
+                        message: format!("table epoch, row epoch {epoch}: evaluations {n}"),
+                    }),
+                },
+            )
+            .collect()
+    }
+
     /// The population of every island after `epoch`, as task ids in slot order.
     pub fn population(&self, epoch: usize) -> Result<Vec<Vec<TaskId>>> {
         let rows: Vec<(i64, i64, i64)> = self.with(|c| {

@@ -197,7 +197,8 @@ merge_islands = true
 /// `resolution.merge_islands`: at the switch the three islands become one, carrying each
 /// island's best into the finer grid (8 re-evaluations, not 3 × 8) and breeding all 3 × 4
 /// children per epoch from then on; the run is bit-identical on 1 and 3 threads and when
-/// interrupted after the merge and resumed (the replay retraces the merge).
+/// interrupted after the merge and resumed (the replay retraces the merge), also from a run that
+/// ended at a budget inside an epoch.
 #[test]
 fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
     let (one, config) = thread_count_blind("merge", |dir| merging_config(dir, 260));
@@ -211,6 +212,24 @@ fn merged_islands_carry_each_islands_best_and_resume_bit_identical() {
     let extended = merging_config(&resumed_dir, 260);
     let resumed = resume_locally(&extended, 2);
     assert_eq!(fingerprint(&resumed), fingerprint(&one));
+
+    // A run that *ended* at its budget in the middle of an epoch (134 = 128 + 6 of the epoch's 12
+    // children) extends too: its replay breeds that last epoch short, as it was, and the run goes
+    // on from there (session 32 found such runs refused: "the replayed populations of epoch N
+    // differ"). The short epoch is part of its history, so it is not the run above; stopped again
+    // at an epoch's end (206 = 134 + 6 × 12) and resumed, it gives the same bits.
+    let extend = |stops: &[u64]| {
+        let dir = scratch_dir("merge-cut-short");
+        let cut = run_locally(&merging_config(&dir, 134), 1);
+        assert_eq!(cut.evaluations, 134);
+        let mut last = cut;
+        for &budget in stops {
+            last = resume_locally(&merging_config(&dir, budget), 2);
+            assert_eq!(last.evaluations, budget);
+        }
+        fingerprint(&last)
+    };
+    assert_eq!(extend(&[260]), extend(&[206, 260]));
 
     let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
     let rows = |sql: &str| -> Vec<(i64, i64, String)> {

@@ -42,6 +42,10 @@ pub(super) struct Search {
     pub(super) replay: HashMap<TaskId, StoredEvaluation>,
     /// The last epoch that session recorded: up to it the replay must match the store exactly.
     pub(super) replay_until: Option<usize>,
+    /// The evaluation count at the end of every epoch an earlier session recorded: where a
+    /// session's budget ended the run inside an epoch, it bred that epoch short, and so must its
+    /// replay (see `breed_children`).
+    replay_epoch_evaluations: HashMap<usize, u64>,
     pub(super) clock: RunClock,
     breeding: Breeding,
     /// Children each island breeds per epoch: the configured count, times the islands merged
@@ -115,6 +119,7 @@ impl Search {
             .collect();
         let replay = ctx.store.evaluations()?;
         let replay_until = ctx.store.last_epoch()?;
+        let replay_epoch_evaluations = ctx.store.epoch_evaluations()?;
         if !replay.is_empty() {
             info!(evaluations = replay.len(), last_epoch = ?replay_until, "resuming: replaying the stored run");
         }
@@ -127,6 +132,7 @@ impl Search {
             next_task: 0,
             replay,
             replay_until,
+            replay_epoch_evaluations,
             clock: RunClock {
                 started: Instant::now(),
                 earlier: ctx.store.recorded_wall_seconds()?,
@@ -231,10 +237,17 @@ impl Search {
     ) -> Vec<Vec<Child>> {
         let raw = &config.raw;
         let islands = self.islands.len();
-        let left = raw
+        let mut left = raw
             .budget
             .evaluations
             .map_or(u64::MAX, |max| max.saturating_sub(spent));
+        // A recorded epoch is bred as the session that recorded it bred it: if that session's
+        // budget cut the epoch short (the run ended there and was resumed with a larger budget),
+        // its recorded evaluations say how short; otherwise they leave room for every child and
+        // change nothing.
+        if let Some(&recorded) = self.replay_epoch_evaluations.get(&(self.epoch + 1)) {
+            left = left.min(recorded.saturating_sub(spent));
+        }
         let breeding = &self.breeding;
         // One climb for the whole run: every island nudges the run's best, and the island that
         // holds it (the lowest index on a tie) judges the nudges.
