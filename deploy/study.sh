@@ -14,10 +14,10 @@
 # --set search.islands=16`: a value that is not TOML is taken as a string; a missing key or section
 # is added), sets `budget.target_rms_percent`, and runs the seeds one after
 # another; start two `run`s to use two cores. `resume` finishes every run of <out> that a stop cut
-# short (one without summary.json, or whose summary says it was stopped), <n> at a time: it points the run's config at <out> (so a study
-# copied from another machine or folder resumes where it now lies), then continues the run from its
-# store with `--resume`, the bits it would have had uninterrupted, or starts it again if it stopped
-# before writing one. `table` prints one markdown row per run from its
+# short (one without summary.json, or whose summary says it was stopped), <n> at a time: it points
+# the run's config at <out> (so a study copied from another machine or folder resumes where it now
+# lies), then continues the run from its store with `--resume`, the bits it would have had
+# uninterrupted, or starts it again if it stopped before writing one. `table` prints one markdown row per run from its
 # config.toml, summary.json and history.csv: the best RMS error at the final resolution, and the
 # evaluations at which the run first reached the paper's simulated error (Table III) and half of it,
 # and the count at the final level's first epoch (how many of them the coarser levels took).

@@ -450,25 +450,8 @@ impl RunStore {
         })
     }
 
-    /// Last epoch recorded (None before the first epoch ended).
-    pub fn last_epoch(&self) -> Result<Option<usize>> {
-        self.with(|c| {
-            c.query_row("SELECT MAX(epoch) FROM epoch", [], |r| {
-                r.get::<_, Option<i64>>(0)
-            })
-        })
-        .and_then(|e| {
-            e.map(|e| {
-                usize::try_from(e).map_err(|_| StoreError::Corrupt {
-                    path: self.path.clone(),
-                    message: format!("table epoch, row epoch {e}: negative epoch"),
-                })
-            })
-            .transpose()
-        })
-    }
-
-    /// The run's evaluation count at the end of every recorded epoch, by epoch.
+    /// The run's evaluation count at the end of every recorded epoch, by epoch (empty before the
+    /// first epoch ended; the last recorded epoch is its largest key).
     pub fn epoch_evaluations(&self) -> Result<HashMap<usize, u64>> {
         let rows: Vec<(i64, i64)> = self.with(|c| {
             let mut stmt = c.prepare("SELECT epoch, evaluations FROM epoch")?;

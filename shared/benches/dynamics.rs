@@ -11,8 +11,8 @@
 //! - `study`: the error-against-run-time study: CSV and a PNG plot under
 //!   `$CARGO_TARGET_DIR/dynamics-study/` (or `target/dynamics-study/`).
 //!
-//! With `mixed` among the arguments every scene of the `min`, `robot`, `threads` and `eval` modes runs the
-//! mixed-precision link kernel (`LinkPrecision::Mixed`) instead of the double one.
+//! With `mixed` among the arguments every scene of the `min`, `robot`, `threads` and `eval` modes
+//! runs the mixed-precision link kernel (`LinkPrecision::Mixed`) instead of the double one.
 
 use std::hint::black_box;
 use std::sync::OnceLock;

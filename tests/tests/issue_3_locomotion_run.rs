@@ -155,8 +155,8 @@ floor = { incline = 2.0 }
 
 /// The link kernel's precision is a dynamics key (issue 14): `mixed` reads as the mixed-precision
 /// kernel and what the run writes back reads the same; a value that is not a precision is one
-/// line naming the file, the key's line and the values it may take; a config without it is the double kernel and
-/// writes no such key.
+/// line naming the file, the key's line and the values it may take; a config without it is the
+/// double kernel and writes no such key.
 #[test]
 fn the_link_precision_is_a_dynamics_key() {
     let mixed = format!(

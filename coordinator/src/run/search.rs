@@ -118,8 +118,8 @@ impl Search {
             })
             .collect();
         let replay = ctx.store.evaluations()?;
-        let replay_until = ctx.store.last_epoch()?;
         let replay_epoch_evaluations = ctx.store.epoch_evaluations()?;
+        let replay_until = replay_epoch_evaluations.keys().max().copied();
         if !replay.is_empty() {
             info!(evaluations = replay.len(), last_epoch = ?replay_until, "resuming: replaying the stored run");
         }

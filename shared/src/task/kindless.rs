@@ -1,4 +1,5 @@
-//! A scene's table read as its task's scene type, its `kind` key skipped ([`super::Scene::deserialize_kind`]).
+//! A scene's table read as its task's scene type, its `kind` key skipped
+//! ([`super::Scene::deserialize_kind`]).
 //!
 //! Why: serde reads an internally tagged enum ([`super::Scene`], tagged by `kind`) by buffering the
 //! whole table before it knows the variant, and the buffer forgets where each key stood. A bad value
