@@ -7,16 +7,20 @@
 //!
 //! The CSV holds one row per run, `target,islands,population,seed,evaluations,session`, where
 //! `evaluations` is the count at which the run first reached the paper's value, or `>N` for a run
-//! stopped short after N. Prints one Markdown row per target and island count (runs, median,
-//! quartiles, P: the probability that a run of that count reaches the paper's value before a
-//! one-island run, ties counting half, and the median's ratio to one island's with its 90 %
-//! bootstrap interval) and draws the ratios, one line per target, with their intervals as bars.
+//! stopped short after N. Prints one Markdown row per target and island count (runs, of them
+//! stopped, median, quartiles, P: the probability that a run of that count reaches the paper's
+//! value before a one-island run, ties counting half, and the median's ratio to one island's with
+//! its 90 % bootstrap interval), then one row per island count with P averaged over the targets,
+//! and draws the ratios, one line per target, with their intervals as bars.
 //!
-//! A stopped run counts as later than any finished one, so a median or quartile that falls on one
-//! is "beyond" the budget, whatever the budget was. One island is every one-island run of the
-//! target, population 48 and 50 together: the same search from two more or fewer random designs
-//! (session 26 found the two samples' medians 1.8–2.3 times apart, both ways, so neither alone is
-//! the baseline).
+//! A stopped run is censored (`amorph_coordinator::study`): medians and quartiles are read off the
+//! Kaplan–Meier estimate, "beyond" where they fall past the last finished run, and P counts the
+//! order of two runs only as far as the data fix it. Until session 33 a stopped run counted as
+//! later than every finished one, which overstated a run a lease had cut short early.
+//!
+//! One island is every one-island run of the target, population 48 and 50 together: the same
+//! search from two more or fewer random designs (session 26 found the two samples' medians
+//! 1.8–2.3 times apart, both ways, so neither alone is the baseline).
 //!
 //! The interval answers how far a median ratio could move with other seeds: both samples are
 //! redrawn with replacement ([`RESAMPLES`] times, from a fixed seed, so the table is reproducible
@@ -30,7 +34,8 @@
 use std::collections::BTreeMap;
 
 use amorph::export::{PlotSpec, Series, line_plot_over};
-use rand::{RngExt, SeedableRng};
+use amorph_coordinator::study::{Reach, Survival, bootstrap_interval, faster};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Redraws per interval. A redrawn median can take only a few values for a handful of runs, so
@@ -43,9 +48,6 @@ const RESAMPLES: usize = 10_000;
 
 /// Intervals drawn above this ratio are cut there (a stopped run's ratio is unbounded).
 const BAR_CEILING: f64 = 2.5;
-
-/// Evaluations to the paper's value; `None` for a run stopped short of it.
-type Reach = Option<u64>;
 
 struct Run {
     target: String,
@@ -76,17 +78,8 @@ fn parse(path: &str, text: &str) -> Result<Vec<Run>, String> {
             .ok()
             .filter(|&n: &u32| n > 0)
             .ok_or_else(|| at("islands: a positive count"))?;
-        let reach = match evaluations.strip_prefix('>') {
-            Some(stopped) => stopped
-                .parse::<u64>()
-                .map(|_| None)
-                .map_err(|_| at("evaluations: >N for a stopped run"))?,
-            None => Some(
-                evaluations
-                    .parse()
-                    .map_err(|_| at("evaluations: a count, or >N for a stopped run"))?,
-            ),
-        };
+        let reach = Reach::parse(evaluations)
+            .ok_or_else(|| at("evaluations: a count, or >N for a run stopped short after N"))?;
         runs.push(Run {
             target: target.to_string(),
             islands,
@@ -94,25 +87,6 @@ fn parse(path: &str, text: &str) -> Result<Vec<Run>, String> {
         });
     }
     Ok(runs)
-}
-
-/// Sort key that puts a stopped run after every finished one.
-fn late(r: &Reach) -> u64 {
-    r.unwrap_or(u64::MAX)
-}
-
-/// The median (the midpoint of the middle two for an even count) and the quartiles as
-/// `deploy/study.sh summary` takes them (the run at rank f·(n − 1), ties to even); `None` where
-/// that falls on a stopped run.
-fn median(sorted: &[Reach]) -> Option<f64> {
-    let n = sorted.len();
-    let (lo, hi) = (sorted[(n - 1) / 2]?, sorted[n / 2]?);
-    Some(0.5 * (lo + hi) as f64)
-}
-
-fn quartile(sorted: &[Reach], f: f64) -> Option<f64> {
-    let rank = (f * (sorted.len() - 1) as f64).round_ties_even() as usize;
-    sorted[rank].map(|v| v as f64)
 }
 
 /// The bootstrap's random stream for one cell of the table: the same seed for every cell, and a
@@ -130,36 +104,44 @@ fn cell_rng(target: &str, islands: u32) -> ChaCha8Rng {
     rng
 }
 
-/// The 90 % percentile-bootstrap interval of median(a) / median(b), a stopped run counting as
-/// infinitely late (so an interval can end at infinity).
-fn ratio_interval(a: &[Reach], b: &[Reach], rng: &mut ChaCha8Rng) -> [f64; 2] {
-    let mut redraw = |sample: &[Reach], scratch: &mut Vec<Reach>| {
-        scratch.clear();
-        scratch.extend((0..sample.len()).map(|_| sample[rng.random_range(0..sample.len())]));
-        scratch.sort_by_key(late);
-        median(scratch).unwrap_or(f64::INFINITY)
-    };
-    let (mut sa, mut sb) = (Vec::new(), Vec::new());
-    let mut ratios: Vec<f64> = (0..RESAMPLES)
-        .map(|_| redraw(a, &mut sa) / redraw(b, &mut sb))
-        .collect();
-    ratios.sort_by(f64::total_cmp);
-    let at = |f: f64| ratios[(f * (RESAMPLES - 1) as f64).round() as usize];
-    [at(0.05), at(0.95)]
+/// median(a) / median(b), infinite where `a`'s median lies beyond its stopped runs.
+fn median_ratio(a: &[Reach], b: &[Reach]) -> f64 {
+    let median = |s: &[Reach]| Survival::new(s).median().unwrap_or(f64::INFINITY);
+    median(a) / median(b)
 }
 
-/// P(a run of `a` reaches the value before a run of `b`), ties half; two stopped runs tie.
-fn faster(a: &[Reach], b: &[Reach]) -> f64 {
-    let wins: f64 = a
-        .iter()
-        .flat_map(|x| b.iter().map(move |y| (late(x), late(y))))
-        .map(|(x, y)| match x.cmp(&y) {
-            std::cmp::Ordering::Less => 1.0,
-            std::cmp::Ordering::Equal => 0.5,
-            std::cmp::Ordering::Greater => 0.0,
-        })
-        .sum();
-    wins / (a.len() * b.len()) as f64
+/// One target's runs with an island count, beside its one-island runs.
+struct Cell<'a> {
+    runs: &'a [Reach],
+    one: &'a [Reach],
+}
+
+/// The pooled row for one island count: P(faster) averaged over the targets, with its 90 %
+/// bootstrap interval (every target's cell and baseline redrawn together). Each target weighs the
+/// same, whatever its number of runs: the question is whether a user who picks that island count
+/// loses on the targets they may meet. No pooled median ratio: a target whose one-island median
+/// can fall beyond its stopped runs (the slope's) makes any mean of ratios run to 0 or infinity.
+fn pooled(cells: &[Cell], islands: u32) -> String {
+    let samples: Vec<&[Reach]> = cells.iter().flat_map(|c| [c.runs, c.one]).collect();
+    let mean_p = |s: &[Vec<Reach>]| {
+        s.chunks(2)
+            .map(|pair| faster(&Survival::new(&pair[0]), &Survival::new(&pair[1])))
+            .sum::<f64>()
+            / cells.len() as f64
+    };
+    let owned: Vec<Vec<Reach>> = samples.iter().map(|s| s.to_vec()).collect();
+    let [lo, hi] = bootstrap_interval(
+        &samples,
+        RESAMPLES,
+        &mut cell_rng("pooled P", islands),
+        mean_p,
+    );
+    format!(
+        "| {islands} | {} | {} | {:.2} ({lo:.2}–{hi:.2}) |",
+        cells.len(),
+        cells.iter().map(|c| c.runs.len()).sum::<usize>(),
+        mean_p(&owned),
+    )
 }
 
 const COLOURS: [[u8; 3]; 4] = [
@@ -197,29 +179,39 @@ fn main() {
     let show = |v: Option<f64>| v.map_or("beyond".to_string(), |v| format!("{v:.0}"));
     let show_ratio = |v: Option<f64>| v.map_or("beyond".to_string(), |v| format!("{v:.2}"));
     println!(
-        "| target | islands | runs | median | quartiles | P(faster than one island) | median ÷ one island's (90 % interval) |"
+        "| target | islands | runs | stopped | median | quartiles | P(faster than one island) | median ÷ one island's (90 % interval) |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     let (mut series, mut bars) = (Vec::new(), Vec::new());
-    for (k, (target, counts)) in by_target.iter_mut().enumerate() {
-        for reaches in counts.values_mut() {
-            reaches.sort_by_key(late);
-        }
+    let mut by_islands: BTreeMap<u32, Vec<Cell>> = BTreeMap::new();
+    for (k, (target, counts)) in by_target.iter().enumerate() {
         let one = counts.get(&1);
         // Each target against its own one-island median, so that four targets of different
         // difficulty share one axis and "not worse than one island" is the line at 1.
-        let scale = one.and_then(|one| median(one)).unwrap_or(f64::NAN);
+        let scale = one
+            .and_then(|one| Survival::new(one).median())
+            .unwrap_or(f64::NAN);
         let colour = COLOURS[k % COLOURS.len()];
         // Targets side by side at each island count, so that their bars do not hide each other.
         let shift = 0.06 * (k as f64 - 1.5);
         let mut points = Vec::new();
         for (&islands, reaches) in counts.iter() {
-            let median = median(reaches);
+            let survival = Survival::new(reaches);
+            let median = survival.median();
             // log2 on a linear axis: a decade axis would run on to 100 islands.
             let x = f64::from(islands).log2() + shift;
             let (p, ratio) = match one {
                 Some(one) if islands > 1 => {
-                    let [lo, hi] = ratio_interval(reaches, one, &mut cell_rng(target, islands));
+                    by_islands
+                        .entry(islands)
+                        .or_default()
+                        .push(Cell { runs: reaches, one });
+                    let [lo, hi] = bootstrap_interval(
+                        &[reaches, one],
+                        RESAMPLES,
+                        &mut cell_rng(target, islands),
+                        |s| median_ratio(&s[0], &s[1]),
+                    );
                     bars.push(Series {
                         label: String::new(),
                         colour,
@@ -228,7 +220,7 @@ fn main() {
                     });
                     let finite = |v: f64| Some(v).filter(|v| v.is_finite());
                     (
-                        format!("{:.2}", faster(reaches, one)),
+                        format!("{:.2}", faster(&survival, &Survival::new(one))),
                         format!(
                             "{} ({}–{})",
                             show_ratio(median.map(|m| m / scale)),
@@ -240,11 +232,15 @@ fn main() {
                 _ => ("–".to_string(), "–".to_string()),
             };
             println!(
-                "| {target} | {islands} | {} | {} | {}–{} | {p} | {ratio} |",
+                "| {target} | {islands} | {} | {} | {} | {}–{} | {p} | {ratio} |",
                 reaches.len(),
+                reaches
+                    .iter()
+                    .filter(|r| matches!(r, Reach::Stopped(_)))
+                    .count(),
                 show(median),
-                show(quartile(reaches, 0.25)),
-                show(quartile(reaches, 0.75)),
+                show(survival.quantile(0.25)),
+                show(survival.quantile(0.75)),
             );
             points.push([x, median.unwrap_or(f64::NAN) / scale]);
         }
@@ -254,6 +250,14 @@ fn main() {
             points,
             markers: true,
         });
+    }
+    println!();
+    println!(
+        "| islands | targets | runs | P(faster than one island), mean over targets (90 % interval) |"
+    );
+    println!("|---|---|---|---|");
+    for (&islands, cells) in &by_islands {
+        println!("{}", pooled(cells, islands));
     }
     let most = runs
         .iter()

@@ -8,7 +8,7 @@ use amorph::export::{Block, Link, Picture, Report};
 use amorph::task::{Artefact, Scene};
 
 use super::finishing::FinerCheck;
-use crate::summary::RunSummary;
+use crate::summary::{RunSummary, StopReason};
 
 /// What the report shows besides the summary: files written by the results writer.
 pub(super) struct ReportInputs<'a> {
@@ -41,6 +41,11 @@ pub(super) fn run_report(summary: &RunSummary, inputs: &ReportInputs<'_>) -> Rep
             .fitness()
             .map_or("none (no design evaluated)".to_string(), |f| format!("{f:e}")),
     )));
+    if summary.stop == StopReason::Shutdown {
+        report.push(Block::Paragraph(
+            "The run was stopped before its end and continues with `--resume`; the end-of-run work (the check at twice the resolution, the print slices and the task's own pictures) is done when it finishes.".into(),
+        ));
+    }
     let (heading, table) = inputs.scene.table(&best.outcome, summary.dims);
     report.push(Block::Heading(heading));
     report.push(table);

@@ -12,7 +12,7 @@ use super::plots::write_progress;
 use super::report::{ReportInputs, run_report, summary_markdown};
 use crate::config::RunConfig;
 use crate::search::Individual;
-use crate::summary::{HistoryRow, RunSummary, fittest};
+use crate::summary::{HistoryRow, RunSummary, StopReason, fittest};
 
 /// Samples along the longest side for the smooth surface STL written at the end of a run: three
 /// per voxel at the paper's 20×20×20 (measured: 1.4 MB per material for a 1,006-voxel robot,
@@ -151,7 +151,12 @@ impl ResultWriter {
             SMOOTH_SAMPLES_AT_END,
         )?);
         let export = &self.config.raw.export;
-        if export.print {
+        // A run stopped by a signal is not finished (it resumes from its store), and the person
+        // who stopped it is waiting: the end-of-run work that simulates or slices the best design
+        // again (seconds for a beam's twice-finer check, minutes for a 20³ robot's walk) waits
+        // for the run's real end.
+        let finished = summary.stop != StopReason::Shutdown;
+        if export.print && finished {
             // A stack too large for its pitch costs the slices, not the run's other results.
             match amorph::export::write_slice_stack(
                 &self.dir.join("exports"),
@@ -172,18 +177,21 @@ impl ResultWriter {
                 Err(e) => tracing::warn!(error = %e, "the voxel-print slices were not written"),
             }
         }
-        let finer = export
-            .finer_check
+        let finer = (export.finer_check && finished)
             .then(|| FinerCheck::run(scene, &best.genome, summary.dims, &best.outcome));
         let island_pictures = self.island_pictures(summary, scene)?;
         // The task's own pictures may simulate the best design once more (a robot's walk); a
         // failure there costs those pictures, not the run's other results.
-        let artefacts = scene
-            .write_artefacts(&self.dir, &best.genome, summary.dims, &best.outcome)
-            .unwrap_or_else(|e| {
-                tracing::warn!(error = %e, "the task's pictures were not written");
-                Vec::new()
-            });
+        let artefacts = if finished {
+            scene
+                .write_artefacts(&self.dir, &best.genome, summary.dims, &best.outcome)
+                .unwrap_or_else(|e| {
+                    tracing::warn!(error = %e, "the task's pictures were not written");
+                    Vec::new()
+                })
+        } else {
+            Vec::new()
+        };
         let name = &self.config.raw.name;
         write_progress(&self.dir, name, summary, scene.figure_spec())?;
         let mut json = serde_json::json!({
