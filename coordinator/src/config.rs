@@ -1,12 +1,11 @@
 //! The run configuration: a TOML file read strictly (unknown keys are errors) and validated into a
 //! [`RunConfig`] before anything runs. Every error is one line naming the key.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use amorph::genome::MutationParams;
 use amorph::task::Scene;
-use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, Visitor};
+use amorph::task::scene_toml::{self, SceneAt};
 use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
@@ -158,22 +157,12 @@ impl RunConfig {
     /// Parses and validates config text; `path` only names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         let raw: RawConfig = toml::from_str(text).map_err(|e| {
-            let e = scene_error(text, &e).unwrap_or(e);
-            let start = e.span().map_or(0, |s| s.start.min(text.len()));
-            let line = text[..start].matches('\n').count() + 1;
-            // The line's own text names the key (or the table) the message is about.
-            let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-            let at = text[line_start..].lines().next().unwrap_or("").trim();
-            let at: String = at.chars().take(80).collect();
-            let message = e.message().replace('\n', " ");
+            let e = scene_toml::relocate(text, SceneAt::Config, &e).unwrap_or(e);
+            let (line, message) = scene_toml::locate(text, &e);
             ConfigError::Parse {
                 path: path.to_owned(),
                 line,
-                message: if at.is_empty() {
-                    message
-                } else {
-                    format!("`{at}`: {message}")
-                },
+                message,
             }
         })?;
         Self::try_from_raw(raw, path)
@@ -200,59 +189,6 @@ impl RunConfig {
     /// The folder this run writes its results into.
     pub fn run_dir(&self) -> PathBuf {
         self.raw.results_dir.join(&self.raw.name)
-    }
-}
-
-/// The error of reading `[scene]` again as the scene its `kind` names, where it is `original`'s
-/// (the same message): the same error at its key's place instead of the `[scene]` line (see
-/// [`Scene::deserialize_kind`]). `None` where that reading succeeds, finds another error, or the
-/// text has no scene kind.
-fn scene_error(text: &str, original: &toml::de::Error) -> Option<toml::de::Error> {
-    let table: toml::Table = text.parse().ok()?;
-    let kind = table.get("scene")?.get("kind")?.as_str()?;
-    let document = toml::Deserializer::parse(text).ok()?;
-    let error = SceneEntry(kind).deserialize(document).err()?;
-    (error.span().is_some() && error.message() == original.message()).then_some(error)
-}
-
-/// A config's `scene` entry read with [`Scene::deserialize_kind`], every other entry skipped.
-struct SceneEntry<'k>(&'k str);
-
-impl<'de> DeserializeSeed<'de> for SceneEntry<'_> {
-    type Value = ();
-
-    fn deserialize<D: Deserializer<'de>>(self, document: D) -> std::result::Result<(), D::Error> {
-        document.deserialize_map(self)
-    }
-}
-
-impl<'de> Visitor<'de> for SceneEntry<'_> {
-    type Value = ();
-
-    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("a run config")
-    }
-
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> std::result::Result<(), A::Error> {
-        while let Some(key) = map.next_key::<String>()? {
-            if key == "scene" {
-                map.next_value_seed(SceneOfKind(self.0))?;
-            } else {
-                map.next_value::<IgnoredAny>()?;
-            }
-        }
-        Ok(())
-    }
-}
-
-/// The `scene` table read as the scene of one kind.
-struct SceneOfKind<'k>(&'k str);
-
-impl<'de> DeserializeSeed<'de> for SceneOfKind<'_> {
-    type Value = Scene;
-
-    fn deserialize<D: Deserializer<'de>>(self, table: D) -> std::result::Result<Scene, D::Error> {
-        Scene::deserialize_kind(self.0, table)
     }
 }
 

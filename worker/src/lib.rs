@@ -12,6 +12,7 @@ use std::path::Path;
 
 use amorph::genome::Genome;
 use amorph::task::Scene;
+use amorph::task::scene_toml::{self, SceneAt};
 use amorph::voxel::GridDims;
 use serde::Deserialize;
 
@@ -78,28 +79,21 @@ pub fn read_genome(path: &Path) -> Result<Genome> {
 
 /// A scene from a TOML file: a run config (its `[scene]` table is used) or a bare scene table.
 pub fn read_scene(path: &Path) -> Result<Scene> {
-    #[derive(Deserialize)]
-    struct WithScene {
-        scene: Scene,
-    }
     let text = read(path)?;
     let parse_error = |message: String| WorkerError::Parse {
         path: path.display().to_string(),
         message,
     };
-    let value: toml::Table =
-        toml::from_str(&text).map_err(|e| parse_error(e.message().to_owned()))?;
-    let scene = if value.contains_key("scene") {
-        value
-            .try_into::<WithScene>()
-            .map(|w| w.scene)
-            .map_err(|e| parse_error(e.message().to_owned()))?
+    let document: toml::Table = toml::from_str(&text).map_err(|e| {
+        let (line, message) = scene_toml::locate(&text, &e);
+        parse_error(format!("line {line}: {message}"))
+    })?;
+    let at = if document.contains_key("scene") {
+        SceneAt::Config
     } else {
-        value
-            .try_into::<Scene>()
-            .map_err(|e| parse_error(e.message().to_owned()))?
+        SceneAt::Document
     };
-    let mut scene = scene;
+    let mut scene = scene_toml::scene_from_toml(&text, at).map_err(parse_error)?;
     scene
         .load_files(path.parent().unwrap_or(Path::new(".")))
         .map_err(|e| parse_error(format!("scene.{e}")))?;

@@ -133,3 +133,44 @@ fn evaluate_prints_the_same_outcome_on_any_number_of_threads() {
     assert!(stderr.contains("--threads 0"), "{stderr}");
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
 }
+
+/// A bad key deep in a scene file is refused in one line naming the file, the line and the key,
+/// whether the file is a bare scene table or a run config (before session 33 the worker gave
+/// serde's message with no line at all).
+#[test]
+fn a_bad_scene_file_is_refused_at_its_key() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("worker-bad-scene");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("genome.json"), GENOME).unwrap();
+    let bare = "kind = \"locomotion\"\n[dynamics]\nlink_precision = \"single\"\n";
+    let config = format!("name = \"x\"\nseed = 1\n\n[scene]\n{SCENE}lenght = 3\n");
+    for (file, text, expect) in [
+        (
+            "bare.toml",
+            bare.to_string(),
+            "line 3: `link_precision = \"single\"`",
+        ),
+        (
+            "config.toml",
+            config,
+            "line 7: `lenght = 3`: unknown field `lenght`",
+        ),
+    ] {
+        let path = dir.join(file);
+        std::fs::write(&path, text).unwrap();
+        let (ok, _, stderr) = worker(&[
+            "evaluate",
+            "--genome",
+            dir.join("genome.json").to_str().unwrap(),
+            "--scene",
+            path.to_str().unwrap(),
+            "--resolution",
+            "6x20x6",
+        ]);
+        assert!(!ok);
+        assert!(stderr.contains(path.to_str().unwrap()), "{stderr}");
+        assert!(stderr.contains(expect), "{file}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    }
+}

@@ -14,6 +14,7 @@ mod error;
 mod kindless;
 pub mod locomotion;
 pub mod memory;
+pub mod scene_toml;
 pub mod stiffness;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
