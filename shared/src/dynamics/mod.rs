@@ -16,6 +16,8 @@ mod error;
 mod integrate;
 mod lanes;
 mod link;
+mod link_ends;
+mod link_frame;
 mod math;
 mod parallel;
 mod passes;

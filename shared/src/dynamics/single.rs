@@ -22,7 +22,9 @@ use pulp::Simd;
 use super::lanes::{
     Arith, LANES, Lanes, Portable, Regroup, load_columns3, load_columns4, portable_arith,
 };
-use super::link::{Ends, Group, Job, Kernel, LinkConstants, LinkOut, LinkStep, Loads, Source, V3};
+use super::link::{Job, LinkConstants, LinkStep};
+use super::link_ends::{Ends, Group, Kernel, LinkOut, Loads, Source};
+use super::link_frame::V3;
 use super::math::Vec3;
 use super::state::{Links, Voxels};
 
