@@ -3,7 +3,7 @@
 //! The kernel is written once, on [`Lanes`], and compiled for two instruction sets through the
 //! [`Arith`] token it carries: [`Portable`] (plain array loops, whatever the compiler makes of
 //! them) and `pulp`'s AVX2 token (explicit vector instructions), each in double precision (four
-//! `f64` lanes) and, wrapped in [`super::single::Single`], in single precision (eight `f32`
+//! `f64` lanes) and, wrapped in [`super::single_lanes::Single`], in single precision (eight `f32`
 //! lanes). Explicit vectors make the vector code a property of the source: left to the optimizer,
 //! a change as small as removing a bounds check turned the whole kernel back into scalar code
 //! (docs/dynamics.md, "Speed"). Both use only IEEE addition, subtraction, multiplication and

@@ -21,7 +21,8 @@ use super::lanes::{Arith, Element, LANES, Lanes, Portable, lane_array};
 use super::link_ends::{Ends, Group, Kernel, LinkOut, Loads, Scatter, Source, Store, VoxelView};
 use super::link_frame::{M3, SERIES_LIMIT, V3, axial_split, on_axis};
 use super::math::{Quat, Vec3};
-use super::single::{SINGLE_LANES, Single, SingleCopy};
+use super::single::SingleCopy;
+use super::single_lanes::{SINGLE_LANES, Single};
 use super::state::{Links, Voxels};
 
 /// Per-step inputs of the link pass.

@@ -25,6 +25,7 @@ mod poisson;
 mod scene;
 mod simulation;
 mod single;
+mod single_lanes;
 mod state;
 
 pub use error::{DynamicsError, Result};
