@@ -25,6 +25,9 @@
 # runs: how many reached the paper's value, the median and quartiles of the evaluations to it (a run
 # that stopped short counts as beyond any budget), and the probability that a run of the setting
 # gets there before a run of the setting with the fewest islands (the number before "x" in its name).
+# That is a quick look while a study runs: for figures, put the runs in docs/data/island_curve.csv
+# and run the island_curve bench, which counts a stopped run as censored at its count (Kaplan-Meier,
+# coordinator/src/study.rs) instead of as the slowest.
 # COORDINATOR overrides the binary (default target/release/coordinator).
 set -euo pipefail
 
