@@ -67,24 +67,17 @@ impl Survival {
         let mut steps = Vec::new();
         let mut left = 1.0;
         let mut at_risk = sorted.len();
-        let mut i = 0;
-        while i < sorted.len() {
-            let count = sorted[i].count();
-            let same: Vec<_> = sorted[i..]
-                .iter()
-                .take_while(|r| r.count() == count)
-                .collect();
+        for same in sorted.chunk_by(|a, b| a.count() == b.count()) {
             let reached = same
                 .iter()
                 .filter(|r| matches!(r, Reach::Reached(_)))
                 .count();
             if reached > 0 {
                 let after = left * (1.0 - reached as f64 / at_risk as f64);
-                steps.push((count, left - after));
+                steps.push((same[0].count(), left - after));
                 left = after;
             }
             at_risk -= same.len();
-            i += same.len();
         }
         let last = steps.last().map_or(0, |&(count, _)| count);
         let tail_after = sorted
