@@ -9,7 +9,9 @@ use amorph::voxel::GridDims;
 use amorph_coordinator::evaluator::{Completion, EvaluatorError};
 use amorph_coordinator::progress::Progress;
 use amorph_coordinator::store::RunStore;
-use amorph_coordinator::{Evaluator, LocalEvaluator, RunConfig, RunContext, RunSummary, Task, run};
+use amorph_coordinator::{
+    Evaluator, LocalEvaluator, RunConfig, RunContext, RunSummary, StopReason, Task, run,
+};
 use amorph_tests::{
     ClusterRun, TestWorker, circular_arc, fingerprint, resume_locally, run_locally, scratch_dir,
     thread_count_blind,
@@ -18,6 +20,17 @@ use amorph_tests::{
 /// Two islands on the circular arc, 4×12×4 then 6×18×6 with the stall rule watching the finest
 /// grid; `overlap` sends each check out with the next epoch's children.
 fn finest_config(results_dir: &Path, evaluations: u64, overlap: bool) -> RunConfig {
+    checking_config(results_dir, 5, evaluations, overlap, false)
+}
+
+/// `finest_config` with its seed, and `carry` for `resolution.carry_checked_best`.
+fn checking_config(
+    results_dir: &Path,
+    seed: u64,
+    evaluations: u64,
+    overlap: bool,
+    carry: bool,
+) -> RunConfig {
     let sections = format!(
         r#"
 [search]
@@ -37,9 +50,10 @@ stall_epochs = 3
 min_improvement = 0.02
 stall_on_finest = true
 overlap_finest_checks = {overlap}
+carry_checked_best = {carry}
 "#
     );
-    circular_arc("finest", 5, results_dir, &sections)
+    circular_arc("finest", seed, results_dir, &sections)
 }
 
 /// `resolution.stall_on_finest`: at the coarse level the run's best is evaluated at the finest
@@ -238,4 +252,127 @@ fn two_grpc_workers_give_the_overlapped_run_bit_for_bit() {
     assert_eq!(stored(&config), stored(&plain));
     let (a, b) = (a.join().unwrap(), b.join().unwrap());
     assert!(a.evaluated > 0 && b.evaluated > 0, "{a:?} {b:?}");
+}
+
+/// A stored evaluation's task, epoch, island, purpose, genome and fitness (-inf for a failure).
+type Row = (i64, i64, i64, String, String, f64);
+
+fn evaluations(config: &RunConfig) -> Vec<Row> {
+    let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
+    let mut stmt = db
+        .prepare(
+            "SELECT task_id, epoch, island, purpose, genome, fitness FROM evaluation ORDER BY task_id",
+        )
+        .unwrap();
+    stmt.query_map([], |r| {
+        let fitness: Option<f64> = r.get(5)?;
+        Ok((
+            r.get(0)?,
+            r.get(1)?,
+            r.get(2)?,
+            r.get(3)?,
+            r.get(4)?,
+            fitness.unwrap_or(f64::NEG_INFINITY),
+        ))
+    })
+    .unwrap()
+    .map(Result::unwrap)
+    .collect()
+}
+
+/// The best fitness recorded at the end of each epoch after `epoch`.
+fn bests_after(config: &RunConfig, epoch: i64) -> Vec<f64> {
+    let db = rusqlite::Connection::open(config.run_dir().join("run.sqlite")).unwrap();
+    let mut stmt = db
+        .prepare("SELECT best_fitness FROM epoch WHERE epoch > ?1 ORDER BY epoch")
+        .unwrap();
+    stmt.query_map([epoch], |r| r.get::<_, f64>(0))
+        .unwrap()
+        .map(Result::unwrap)
+        .collect()
+}
+
+/// `resolution.carry_checked_best`: on a seed where the coarse level climbed past the design its
+/// checks ranked best, so that the switch's re-evaluated populations hold nothing as good, that
+/// design joins the finest level anyway, at no evaluation: the run is the plain one up to the
+/// switch, evaluation for evaluation, spends the same budget, breeds differently from there, and
+/// its best at the finest level is never worse than the best check. Bit-identical on 1
+/// and 3 threads, and when stopped at the switch for want of budget and resumed with more (the
+/// resumed session rebuilds the carried design from the replayed checks).
+#[test]
+fn the_best_checked_design_is_carried_into_the_finest_level() {
+    let seed = 5;
+    let (whole, carried) =
+        thread_count_blind("carry", |dir| checking_config(dir, seed, 400, true, true));
+    let plain = checking_config(&scratch_dir("carry-plain"), seed, 400, true, false);
+    run_locally(&plain, 1);
+    let (carried_rows, plain_rows) = (evaluations(&carried), evaluations(&plain));
+    assert_eq!(carried_rows.len(), plain_rows.len(), "the same budget");
+
+    let switch: Vec<&Row> = plain_rows
+        .iter()
+        .filter(|r| r.3 == "reevaluation")
+        .collect();
+    let (switch_epoch, last_task) = (switch[0].1, switch.last().unwrap().0);
+    let before =
+        |rows: &[Row]| -> Vec<Row> { rows.iter().filter(|r| r.0 <= last_task).cloned().collect() };
+    assert_eq!(before(&carried_rows), before(&plain_rows));
+
+    // The first check of the best rank, as the run keeps it.
+    let best_check = (plain_rows.iter().filter(|r| r.3 == "finest_check"))
+        .reduce(|a, b| if b.5 > a.5 { b } else { a })
+        .expect("checks at the coarse level");
+    let reevaluated_best = switch.iter().map(|r| r.5).fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        reevaluated_best < best_check.5,
+        "seed {seed} does not leave its best check behind: re-evaluated {reevaluated_best}, checked {}",
+        best_check.5
+    );
+    assert!(
+        !switch
+            .iter()
+            .any(|r| r.2 == best_check.2 && r.4 == best_check.4),
+        "the checked design is no longer in its island"
+    );
+    let after =
+        |rows: &[Row]| -> Vec<Row> { rows.iter().filter(|r| r.0 > last_task).cloned().collect() };
+    assert_ne!(
+        after(&carried_rows),
+        after(&plain_rows),
+        "the carried design changed the breeding"
+    );
+    let carried_bests = bests_after(&carried, switch_epoch);
+    assert!(!carried_bests.is_empty());
+    assert!(
+        carried_bests.iter().all(|&b| b >= best_check.5),
+        "{carried_bests:?} against the best check {}",
+        best_check.5
+    );
+
+    // Stopped where the switch's re-evaluation no longer fits the budget, then extended, with
+    // the key and without: the stopped run ends at the stall, and the extended one switches
+    // there as the run with the larger budget did.
+    let plain_whole = run_locally(&plain, 1);
+    for (carry, whole) in [(false, &plain_whole), (true, &whole)] {
+        let resumed_dir = scratch_dir(&format!("carry-resumed-{carry}"));
+        // Every evaluation before the switch's re-evaluation (the check that ended the level
+        // too), and room for a few more but not for the re-evaluation: once bred at the coarse
+        // level, they made the extended run a different one.
+        let before_switch = plain_rows.iter().filter(|r| r.0 < switch[0].0).count() as u64;
+        let stop_at = before_switch + switch.len() as u64 / 2;
+        let first = run_locally(
+            &checking_config(&resumed_dir, seed, stop_at, true, carry),
+            1,
+        );
+        assert_eq!(first.evaluations, before_switch);
+        assert_eq!(first.stop, StopReason::EvaluationBudget);
+        assert!(
+            first
+                .history
+                .iter()
+                .all(|r| r.epoch <= switch_epoch as usize)
+        );
+        let resumed = resume_locally(&checking_config(&resumed_dir, seed, 400, true, carry), 2);
+        assert_eq!(fingerprint(&resumed), fingerprint(whole), "carry {carry}");
+    }
 }

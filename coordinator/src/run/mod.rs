@@ -143,9 +143,10 @@ fn stop_reason(
     if shutdown.load(Ordering::Relaxed) {
         return Some(StopReason::Shutdown);
     }
-    if budget
-        .evaluations
-        .is_some_and(|max| search.evaluations >= max)
+    if search.switch_unaffordable
+        || budget
+            .evaluations
+            .is_some_and(|max| search.evaluations >= max)
     {
         return Some(StopReason::EvaluationBudget);
     }

@@ -29,7 +29,7 @@ use crate::verification::Evaluated;
 
 mod finest;
 
-use finest::Overlap;
+use finest::{Overlap, carry_checked};
 
 pub(super) struct Search {
     pub(super) islands: Vec<Island>,
@@ -58,6 +58,11 @@ pub(super) struct Search {
     /// this coarse level, and the best rank such a check has given (what the stall rule watches).
     finest_checked: Option<Genome>,
     finest_best: f64,
+    /// The design those checks ranked best, scored at the finest level, with the island that
+    /// held it (carried into the finest level by `resolution.carry_checked_best`).
+    checked_best: Option<(usize, Individual)>,
+    /// The level stalled with less budget left than the switch's re-evaluation: the run ends.
+    pub(super) switch_unaffordable: bool,
     /// The next epoch's children, sent out beside a finest-level check
     /// (`resolution.overlap_finest_checks`) and waiting for the stall rule's verdict.
     overlap: Option<Overlap>,
@@ -142,6 +147,8 @@ impl Search {
             split: SplitWatch::new(raw.search.split_after_stall),
             finest_checked: None,
             finest_best: f64::NEG_INFINITY,
+            checked_best: None,
+            switch_unaffordable: false,
             overlap: None,
         };
         let dims = raw.resolution.dims(0);
@@ -316,9 +323,10 @@ impl Search {
 
     /// Moves to the next resolution once progress stalls there, re-evaluating every population
     /// (or, with `resolution.merge_islands`, the islands' best in turn as one population of
-    /// `resolution.merged_population`). With
-    /// less budget left than that re-evaluation, the run ends at the current level rather than
-    /// overshoot its evaluation budget.
+    /// `resolution.merged_population`). With less budget left than that re-evaluation, the run
+    /// ends here (`switch_unaffordable`) rather than overshoot its budget or breed on at a level
+    /// it would have left: a run resumed with a larger budget then switches where the run with
+    /// that budget from the start did, and replays to the same bits.
     pub(super) fn switch_if_stalled(
         &mut self,
         config: &RunConfig,
@@ -346,7 +354,14 @@ impl Search {
             .budget
             .evaluations
             .is_none_or(|max| max.saturating_sub(self.evaluations) >= reevaluations);
-        if !(switch_affordable && self.resolution.observe(watched, self.evaluations, schedule)) {
+        let mut next = self.resolution.clone();
+        let switch = next.observe(watched, self.evaluations, schedule);
+        if switch && !switch_affordable {
+            self.switch_unaffordable = true;
+            return Ok(());
+        }
+        self.resolution = next;
+        if !switch {
             return Ok(());
         }
         if let Some(overlap) = self.overlap.take() {
@@ -354,6 +369,9 @@ impl Search {
         }
         self.finest_checked = None;
         self.finest_best = f64::NEG_INFINITY;
+        // Its score is at the finest level: it can only join a population scored there.
+        let checked_best = (self.checked_best.take())
+            .filter(|_| schedule.carry_checked_best && self.resolution.is_final(schedule));
         let carried: Vec<Vec<(usize, usize)>> = if merge {
             vec![merge_order(&self.islands, merged)]
         } else {
@@ -388,12 +406,22 @@ impl Search {
                 .collect();
             self.children_per_island *= self.islands.len();
             self.islands = vec![Island::from_evaluated(IslandId(0), rng, population)];
-            return Ok(());
+        } else {
+            for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
+                for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
+                    ind.outcome = outcome;
+                    ind.task = task;
+                }
+            }
         }
-        for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
-            for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
-                ind.outcome = outcome;
-                ind.task = task;
+        if let Some((island, design)) = checked_best {
+            // Merged islands are one: the design joins it wherever it was checked.
+            let island = island.min(self.islands.len() - 1);
+            if let Some(slot) = carry_checked(&mut self.islands[island], design) {
+                info!(
+                    epoch = self.epoch,
+                    island, slot, "the best design checked at the finest level carried into it"
+                );
             }
         }
         Ok(())

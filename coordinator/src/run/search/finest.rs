@@ -12,7 +12,7 @@ use super::super::{Result, RunContext};
 use super::{Search, genomes_of};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
-use crate::search::{Child, Island};
+use crate::search::{Child, Individual, Island};
 use crate::store::Purpose;
 use crate::verification::{self, Evaluated};
 
@@ -91,10 +91,22 @@ impl Search {
             ctx,
             &verification::all_decide,
         )?;
-        let (_, outcome) = &outcomes[island][0];
+        let (task, outcome) = &outcomes[island][0];
         info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %finest, "the run's best checked at the finest level");
-        self.finest_best = self.finest_best.max(outcome.rank());
-        self.finest_checked = genomes.swap_remove(island).pop();
+        let genome = genomes
+            .swap_remove(island)
+            .pop()
+            .expect("the checked genome");
+        if outcome.rank() > self.finest_best {
+            self.finest_best = outcome.rank();
+            let design = Individual {
+                genome: genome.clone(),
+                outcome: outcome.clone(),
+                task: *task,
+            };
+            self.checked_best = Some((island, design));
+        }
+        self.finest_checked = Some(genome);
         Ok(self.finest_best)
     }
 
@@ -103,4 +115,22 @@ impl Search {
         self.islands = overlap.islands_before;
         self.next_task = overlap.next_task_before;
     }
+}
+
+/// Puts `design`, already scored at the level `island` has just been re-evaluated at, in place of
+/// the island's worst individual, unless the island holds it already (its re-evaluation gave the
+/// same bits) or it is not fitter than that worst. Returns the slot it took.
+pub(super) fn carry_checked(island: &mut Island, design: Individual) -> Option<usize> {
+    if island.population.iter().any(|i| i.genome == design.genome) {
+        return None;
+    }
+    let worst = island.worst_index();
+    if !design
+        .outcome
+        .is_fitter_than(&island.population[worst].outcome)
+    {
+        return None;
+    }
+    island.population[worst] = design;
+    Some(worst)
 }
