@@ -55,11 +55,11 @@ pub(super) struct Search {
     /// Islands on demand: when the one population splits into the configured islands.
     split: SplitWatch,
     /// With `resolution.stall_on_finest`: the last best genome evaluated at the finest level at
-    /// this coarse level, and the best rank such a check has given (what the stall rule watches).
+    /// this coarse level.
     finest_checked: Option<Genome>,
-    finest_best: f64,
     /// The design those checks ranked best, scored at the finest level, with the island that
-    /// held it (carried into the finest level by `resolution.carry_checked_best`).
+    /// held it: its rank is what the stall rule watches, and `resolution.carry_checked_best`
+    /// carries it into the finest level.
     checked_best: Option<(usize, Individual)>,
     /// The level stalled with less budget left than the switch's re-evaluation: the run ends.
     pub(super) switch_unaffordable: bool,
@@ -146,7 +146,6 @@ impl Search {
             children_per_island: raw.search.children_per_epoch * together,
             split: SplitWatch::new(raw.search.split_after_stall),
             finest_checked: None,
-            finest_best: f64::NEG_INFINITY,
             checked_best: None,
             switch_unaffordable: false,
             overlap: None,
@@ -368,7 +367,6 @@ impl Search {
             self.drop_overlap(overlap);
         }
         self.finest_checked = None;
-        self.finest_best = f64::NEG_INFINITY;
         // Its score is at the finest level: it can only join a population scored there.
         let checked_best = (self.checked_best.take())
             .filter(|_| schedule.carry_checked_best && self.resolution.is_final(schedule));

@@ -48,7 +48,7 @@ impl Search {
             .expect("the run's best is an island's best");
         let affordable = (config.raw.budget.evaluations).is_none_or(|max| self.evaluations < max);
         if !affordable || self.finest_checked.as_ref() == Some(&best.genome) {
-            return Ok(self.finest_best);
+            return Ok(self.finest_best());
         }
         let mut genomes = vec![Vec::new(); island + 1];
         genomes[island].push(best.genome.clone());
@@ -97,8 +97,7 @@ impl Search {
             .swap_remove(island)
             .pop()
             .expect("the checked genome");
-        if outcome.rank() > self.finest_best {
-            self.finest_best = outcome.rank();
+        if outcome.rank() > self.finest_best() {
             let design = Individual {
                 genome: genome.clone(),
                 outcome: outcome.clone(),
@@ -107,7 +106,12 @@ impl Search {
             self.checked_best = Some((island, design));
         }
         self.finest_checked = Some(genome);
-        Ok(self.finest_best)
+        Ok(self.finest_best())
+    }
+
+    /// The best rank the checks at this level have given.
+    fn finest_best(&self) -> f64 {
+        (self.checked_best.as_ref()).map_or(f64::NEG_INFINITY, |(_, d)| d.outcome.rank())
     }
 
     /// Forgets children bred ahead of their epoch as if they had never been bred.
