@@ -1,7 +1,8 @@
 //! The state of a search between epochs and the four things that change it: the initial
 //! populations, an epoch (breed, evaluate, settle, apply), migration, and the switch to the next
-//! resolution. Each is a function of the seed and the outcomes alone, so a replay from the run
-//! store retraces it exactly.
+//! resolution (`switch`, with the coarse level's checks at the finest one in `finest`). Each is a
+//! function of the seed and the outcomes alone, so a replay from the run store retraces it
+//! exactly (`record`).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -15,21 +16,24 @@ use rand_chacha::ChaCha8Rng;
 use tracing::info;
 
 use super::batch::{evaluate_all, evaluate_settled, settle};
-use super::{Result, RunContext, RunError};
+use super::{Result, RunContext};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
     BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, SplitWatch,
-    merge_order, migrate, split_island,
+    migrate,
 };
-use crate::store::{EpochRecord, MigrationRecord, Purpose, RunStore, StoredEvaluation};
-use crate::summary::{HistoryRow, fittest};
+use crate::store::{MigrationRecord, Purpose, StoredEvaluation};
+use crate::summary::fittest;
 use crate::verification::Evaluated;
 
 mod finest;
+mod record;
+mod switch;
 
-use finest::{Overlap, carry_checked};
+use finest::Overlap;
+pub(super) use record::record_epoch;
 
 pub(super) struct Search {
     pub(super) islands: Vec<Island>,
@@ -320,162 +324,8 @@ impl Search {
         migrations
     }
 
-    /// Moves to the next resolution once progress stalls there, re-evaluating every population
-    /// (or, with `resolution.merge_islands`, the islands' best in turn as one population of
-    /// `resolution.merged_population`). With less budget left than that re-evaluation, the run
-    /// ends here (`switch_unaffordable`) rather than overshoot its budget or breed on at a level
-    /// it would have left: a run resumed with a larger budget then switches where the run with
-    /// that budget from the start did, and replays to the same bits.
-    pub(super) fn switch_if_stalled(
-        &mut self,
-        config: &RunConfig,
-        evaluator: &mut dyn Evaluator,
-        ctx: &RunContext<'_>,
-    ) -> Result<()> {
-        let schedule = &config.raw.resolution;
-        let merge = schedule.merge_islands && self.islands.len() > 1;
-        let merged = schedule
-            .merged_population
-            .unwrap_or(config.raw.search.population);
-        let individuals: usize = self.islands.iter().map(|i| i.population.len()).sum();
-        let reevaluations = if merge {
-            individuals.min(merged)
-        } else {
-            individuals
-        } as u64;
-        let watched = if schedule.stall_on_finest && !self.resolution.is_final(schedule) {
-            self.check_on_finest(config, evaluator, ctx)?
-        } else {
-            self.best().outcome.rank()
-        };
-        let switch_affordable = config
-            .raw
-            .budget
-            .evaluations
-            .is_none_or(|max| max.saturating_sub(self.evaluations) >= reevaluations);
-        let mut next = self.resolution.clone();
-        let switch = next.observe(watched, self.evaluations, schedule);
-        if switch && !switch_affordable {
-            self.switch_unaffordable = true;
-            return Ok(());
-        }
-        self.resolution = next;
-        if !switch {
-            return Ok(());
-        }
-        if let Some(overlap) = self.overlap.take() {
-            self.drop_overlap(overlap);
-        }
-        self.finest_checked = None;
-        // Its score is at the finest level: it can only join a population scored there.
-        let checked_best = (self.checked_best.take())
-            .filter(|_| schedule.carry_checked_best && self.resolution.is_final(schedule));
-        let carried: Vec<Vec<(usize, usize)>> = if merge {
-            vec![merge_order(&self.islands, merged)]
-        } else {
-            (self.islands.iter().enumerate())
-                .map(|(i, island)| (0..island.population.len()).map(|s| (i, s)).collect())
-                .collect()
-        };
-        let dims = schedule.dims(self.resolution.level);
-        info!(epoch = self.epoch, resolution = %dims, merge, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
-        let genomes: Vec<Vec<Genome>> = carried
-            .iter()
-            .map(|group| {
-                (group.iter())
-                    .map(|&(i, s)| self.islands[i].population[s].genome.clone())
-                    .collect()
-            })
-            .collect();
-        let outcomes =
-            evaluate_settled(self, evaluator, &genomes, dims, Purpose::Reevaluation, ctx)?;
-        if merge {
-            // The merged island draws from the stream after the islands' own (stream 0 is
-            // migration's, 1..=islands the islands'), so the run stays a function of its seed.
-            let mut rng = ChaCha8Rng::seed_from_u64(config.raw.seed);
-            rng.set_stream(config.raw.search.islands as u64 + 1);
-            let population = (genomes.into_iter().flatten())
-                .zip(outcomes.into_iter().flatten())
-                .map(|(genome, (task, outcome))| Individual {
-                    genome,
-                    outcome,
-                    task,
-                })
-                .collect();
-            self.children_per_island *= self.islands.len();
-            self.islands = vec![Island::from_evaluated(IslandId(0), rng, population)];
-        } else {
-            for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
-                for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
-                    ind.outcome = outcome;
-                    ind.task = task;
-                }
-            }
-        }
-        if let Some((island, design)) = checked_best {
-            // Merged islands are one: the design joins it wherever it was checked.
-            let island = island.min(self.islands.len() - 1);
-            if let Some(slot) = carry_checked(&mut self.islands[island], design) {
-                info!(
-                    epoch = self.epoch,
-                    island, slot, "the best design checked at the finest level carried into it"
-                );
-            }
-        }
-        Ok(())
-    }
-
-    /// Islands on demand: splits the one population into the configured islands once the run's
-    /// best at the finest resolution has stalled for `search.split_after_stall` epochs. The split
-    /// islands draw from the streams after merging's (`islands + 2` onwards).
-    pub(super) fn split_if_stalled(&mut self, config: &RunConfig) {
-        let raw = &config.raw;
-        if !self.resolution.is_final(&raw.resolution)
-            || !(self.split).observe(self.best().outcome.rank(), raw.resolution.min_improvement)
-        {
-            return;
-        }
-        // Children bred ahead wait only beside a coarse level's finest check; the switch to the
-        // finest level drops them, so none can be held from the islands before the split.
-        debug_assert!(self.overlap.is_none(), "children held at the finest level");
-        let whole = self.islands.pop().expect("an unsplit run has one island");
-        let islands = raw.search.islands;
-        info!(
-            epoch = self.epoch,
-            islands,
-            "splitting the population into islands (progress stalled at the finest resolution)"
-        );
-        self.islands = split_island(whole, islands, raw.seed, islands as u64 + 2);
-        self.children_per_island = raw.search.children_per_epoch;
-    }
-
     pub(super) fn best(&self) -> &Individual {
         fittest(self.islands.iter().map(|i| i.best()))
-    }
-
-    /// Each island's line of `history.csv` for the epoch just applied.
-    pub(super) fn history_rows(
-        &self,
-        scene: &Scene,
-        dims: GridDims,
-        replacements: &[usize],
-    ) -> Vec<HistoryRow> {
-        let wall = self.clock.seconds();
-        self.islands
-            .iter()
-            .zip(replacements)
-            .map(|(island, &replacements)| {
-                history_row(
-                    scene,
-                    island,
-                    self.epoch,
-                    self.evaluations,
-                    wall,
-                    dims,
-                    replacements,
-                )
-            })
-            .collect()
     }
 }
 
@@ -484,76 +334,4 @@ fn genomes_of(children: &[Vec<Child>]) -> Vec<Vec<Genome>> {
         .iter()
         .map(|c| c.iter().map(|c| c.genome.clone()).collect())
         .collect()
-}
-
-/// Stores the end of an epoch. While replaying, first checks the replayed populations against the
-/// ones the earlier session recorded: any difference means the store is not this run's.
-pub(super) fn record_epoch(
-    search: &Search,
-    migrations: &[MigrationRecord],
-    dims: GridDims,
-    store: &RunStore,
-) -> Result<()> {
-    let populations: Vec<Vec<(TaskId, Option<f64>)>> = search
-        .islands
-        .iter()
-        .map(|i| {
-            i.population
-                .iter()
-                .map(|ind| (ind.task, ind.outcome.fitness()))
-                .collect()
-        })
-        .collect();
-    if search.replay_until.is_some_and(|last| search.epoch <= last) {
-        let stored = store.population(search.epoch)?;
-        let replayed: Vec<Vec<TaskId>> = populations
-            .iter()
-            .map(|p| p.iter().map(|&(t, _)| t).collect())
-            .collect();
-        if stored != replayed {
-            return Err(RunError::Replay(format!(
-                "the replayed populations of epoch {} differ from the ones {} recorded",
-                search.epoch,
-                store.path().display()
-            )));
-        }
-    }
-    store.record_epoch(&EpochRecord {
-        epoch: search.epoch,
-        evaluations: search.evaluations,
-        wall_seconds: search.clock.seconds(),
-        resolution: dims.to_string(),
-        best_fitness: search.best().outcome.fitness(),
-        populations,
-        migrations,
-    })?;
-    Ok(())
-}
-
-fn history_row(
-    scene: &Scene,
-    island: &Island,
-    epoch: usize,
-    evaluations: u64,
-    wall_seconds: f64,
-    dims: GridDims,
-    replacements: usize,
-) -> HistoryRow {
-    let best = island.best();
-    let valid: Vec<f64> = island
-        .population
-        .iter()
-        .filter_map(|i| i.outcome.fitness())
-        .collect();
-    HistoryRow {
-        epoch,
-        evaluations,
-        wall_seconds,
-        resolution: dims.to_string(),
-        island: island.id.0,
-        best_fitness: best.outcome.fitness(),
-        best_figure: scene.figure(&best.outcome),
-        mean_fitness: (!valid.is_empty()).then(|| valid.iter().sum::<f64>() / valid.len() as f64),
-        replacements,
-    }
 }
