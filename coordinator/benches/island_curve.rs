@@ -34,7 +34,7 @@
 use std::collections::BTreeMap;
 
 use amorph::export::{PlotSpec, Series, line_plot_over};
-use amorph_coordinator::study::{Reach, Survival, bootstrap_interval, faster};
+use amorph_coordinator::study::{Reach, Survival, bootstrap_interval, faster, parse_runs};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -48,46 +48,6 @@ const RESAMPLES: usize = 10_000;
 
 /// Intervals drawn above this ratio are cut there (a stopped run's ratio is unbounded).
 const BAR_CEILING: f64 = 2.5;
-
-struct Run {
-    target: String,
-    islands: u32,
-    reach: Reach,
-}
-
-fn parse(path: &str, text: &str) -> Result<Vec<Run>, String> {
-    let mut lines = text.lines().enumerate();
-    let header = lines.next().map(|(_, l)| l.trim());
-    if header != Some("target,islands,population,seed,evaluations,session") {
-        return Err(format!(
-            "{path}:1: expected the header target,islands,population,seed,evaluations,session"
-        ));
-    }
-    let mut runs = Vec::new();
-    for (i, line) in lines {
-        let at = |what: &str| format!("{path}:{}: {what}", i + 1);
-        if line.trim().is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        let [target, islands, _population, _seed, evaluations, _session] = fields[..] else {
-            return Err(at("expected six comma-separated fields"));
-        };
-        let islands = islands
-            .parse()
-            .ok()
-            .filter(|&n: &u32| n > 0)
-            .ok_or_else(|| at("islands: a positive count"))?;
-        let reach = Reach::parse(evaluations)
-            .ok_or_else(|| at("evaluations: a count, or >N for a run stopped short after N"))?;
-        runs.push(Run {
-            target: target.to_string(),
-            islands,
-            reach,
-        });
-    }
-    Ok(runs)
-}
 
 /// The bootstrap's random stream for one cell of the table: the same seed for every cell, and a
 /// stream number hashed (FNV-1a) from the target's name and the island count, so that a cell's
@@ -162,7 +122,7 @@ fn main() {
     };
     let runs = std::fs::read_to_string(csv)
         .map_err(|e| format!("{csv}: {e}"))
-        .and_then(|text| parse(csv, &text))
+        .and_then(|text| parse_runs(csv, &text))
         .unwrap_or_else(|e| {
             eprintln!("island_curve: {e}");
             std::process::exit(2);

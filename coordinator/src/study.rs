@@ -12,6 +12,8 @@
 //! middle two for an even count) and the Mann–Whitney fraction with ties half, which the tests
 //! check.
 
+use std::cmp::Ordering;
+
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
@@ -38,6 +40,53 @@ impl Reach {
             Reach::Reached(n) | Reach::Stopped(n) => n,
         }
     }
+}
+
+/// One row of a study's CSV (`docs/data/island_curve.csv` and the policy studies beside it):
+/// `target,islands,population,seed,evaluations,session`, where `evaluations` is the count at which
+/// the run first reached the target, or `>N` for a run stopped short after N.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RecordedRun {
+    pub target: String,
+    pub islands: u32,
+    pub population: u32,
+    pub seed: u64,
+    pub reach: Reach,
+}
+
+pub const RUNS_HEADER: &str = "target,islands,population,seed,evaluations,session";
+
+/// The runs of a study's CSV; a malformed line is refused with its file, line and field.
+pub fn parse_runs(path: &str, text: &str) -> Result<Vec<RecordedRun>, String> {
+    let mut lines = text.lines().enumerate();
+    if lines.next().map(|(_, l)| l.trim()) != Some(RUNS_HEADER) {
+        return Err(format!("{path}:1: expected the header {RUNS_HEADER}"));
+    }
+    let mut runs = Vec::new();
+    for (i, line) in lines {
+        let at = |what: &str| format!("{path}:{}: {what}", i + 1);
+        if line.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let [target, islands, population, seed, evaluations, _session] = fields[..] else {
+            return Err(at("expected six comma-separated fields"));
+        };
+        let positive = |text: &str, field: &str| {
+            (text.parse().ok())
+                .filter(|&n: &u32| n > 0)
+                .ok_or_else(|| at(&format!("{field}: a positive count")))
+        };
+        runs.push(RecordedRun {
+            target: target.to_string(),
+            islands: positive(islands, "islands")?,
+            population: positive(population, "population")?,
+            seed: seed.parse().map_err(|_| at("seed: a whole number"))?,
+            reach: Reach::parse(evaluations)
+                .ok_or_else(|| at("evaluations: a count, or >N for a run stopped short after N"))?,
+        });
+    }
+    Ok(runs)
 }
 
 /// Two probabilities closer than this are equal: the estimate is a product of ratios of small
@@ -144,6 +193,36 @@ pub fn faster(a: &Survival, b: &Survival) -> f64 {
         p += a.tail * mass_b * if y <= a.tail_after { 0.0 } else { 0.5 };
     }
     p + 0.5 * a.tail * b.tail
+}
+
+/// The order of one seed's two runs under two policies, as far as the data fix it: `Less` where
+/// `a` reached the target first, `Equal` where both reached it at the same count, `None` where a
+/// run stopped before the other's count (or both stopped) leaves it open. A seed fixes everything
+/// up to where the policies differ, so such pairs compare the policies alone, without the seeds'
+/// spread between them.
+pub fn paired_order(a: Reach, b: Reach) -> Option<Ordering> {
+    match (a, b) {
+        (Reach::Reached(x), Reach::Reached(y)) => Some(x.cmp(&y)),
+        // Stopped at y without reaching it: any count up to y came first.
+        (Reach::Reached(x), Reach::Stopped(y)) => (x <= y).then_some(Ordering::Less),
+        (Reach::Stopped(x), Reach::Reached(y)) => (y <= x).then_some(Ordering::Greater),
+        (Reach::Stopped(_), Reach::Stopped(_)) => None,
+    }
+}
+
+/// The two-sided exact sign test: the probability, were either policy as likely to win each
+/// pair, of a split at least as uneven as `wins` against `losses` (ties and open pairs left out).
+pub fn sign_test(wins: u64, losses: u64) -> f64 {
+    let n = wins + losses;
+    let fewer = wins.min(losses);
+    // C(n, k) / 2^n summed for k ≤ fewer, term by term so that no factorial overflows.
+    let mut term = 0.5_f64.powi(n as i32);
+    let mut tail = term;
+    for k in 1..=fewer {
+        term *= (n - k + 1) as f64 / k as f64;
+        tail += term;
+    }
+    (2.0 * tail).min(1.0)
 }
 
 /// The 5th and 95th percentiles of `statistic` over `resamples` redraws of the samples, each
@@ -293,6 +372,74 @@ mod tests {
             Survival::new(&s[0]).median().unwrap_or(f64::INFINITY)
         });
         assert_eq!([lo, hi], [400.0, 400.0]);
+    }
+
+    #[test]
+    fn a_pair_is_ordered_only_where_the_data_fix_it() {
+        use Reach::{Reached, Stopped};
+        assert_eq!(
+            paired_order(Reached(300), Reached(500)),
+            Some(Ordering::Less)
+        );
+        assert_eq!(
+            paired_order(Reached(500), Reached(500)),
+            Some(Ordering::Equal)
+        );
+        // Stopped at 500 without the target: a run that reached it at 500 or sooner came first.
+        assert_eq!(
+            paired_order(Reached(500), Stopped(500)),
+            Some(Ordering::Less)
+        );
+        assert_eq!(paired_order(Reached(501), Stopped(500)), None);
+        assert_eq!(
+            paired_order(Stopped(900), Reached(200)),
+            Some(Ordering::Greater)
+        );
+        assert_eq!(paired_order(Stopped(900), Stopped(20_000)), None);
+    }
+
+    #[test]
+    fn the_sign_test_is_the_binomial_tail_doubled() {
+        // 9 wins in 10: 2 (C(10,0) + C(10,1)) / 2^10 = 22 / 1024.
+        assert!((sign_test(9, 1) - 22.0 / 1024.0).abs() < 1e-15);
+        assert_eq!(sign_test(1, 9), sign_test(9, 1));
+        // An even split, or no pair at all, is no evidence either way.
+        assert_eq!(sign_test(5, 5), 1.0);
+        assert_eq!(sign_test(0, 0), 1.0);
+        // 6 of 6 one way: 2 / 64.
+        assert!((sign_test(6, 0) - 2.0 / 64.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_study_csv_parses_and_a_bad_line_names_its_place() {
+        let text =
+            format!("{RUNS_HEADER}\ncircular_arc,8,6,3,>5011,34\n\nstraight,1,50,2,2142,20\n");
+        let runs = parse_runs("runs.csv", &text).unwrap();
+        assert_eq!(runs.len(), 2);
+        assert_eq!(
+            runs[0],
+            RecordedRun {
+                target: "circular_arc".into(),
+                islands: 8,
+                population: 6,
+                seed: 3,
+                reach: Reach::Stopped(5011),
+            }
+        );
+        let bad = format!("{RUNS_HEADER}\nstraight,1,50,2,2142,20\nstraight,0,50,2,2142,20\n");
+        assert_eq!(
+            parse_runs("runs.csv", &bad).unwrap_err(),
+            "runs.csv:3: islands: a positive count"
+        );
+        assert_eq!(
+            parse_runs("runs.csv", "target,seed\n").unwrap_err(),
+            format!("runs.csv:1: expected the header {RUNS_HEADER}")
+        );
+        let short = format!("{RUNS_HEADER}\nstraight,1,50,2,2142\n");
+        assert_eq!(
+            parse_runs("runs.csv", &short).unwrap_err(),
+            "runs.csv:2: expected six comma-separated fields"
+        );
     }
 
     #[test]
