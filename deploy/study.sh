@@ -27,7 +27,9 @@
 # gets there before a run of the setting with the fewest islands (the number before "x" in its name).
 # That is a quick look while a study runs: for figures, put the runs in docs/data/island_curve.csv
 # and run the island_curve bench, which counts a stopped run as censored at its count (Kaplan-Meier,
-# coordinator/src/study.rs) instead of as the slowest.
+# coordinator/src/study.rs) instead of as the slowest. A policy key studied against the runs it
+# changes (same settings and seeds, key on) goes in a CSV of its own, compared seed by seed with
+# the paired_runs bench (docs/data/carry_checked.csv, docs/evolution.md session 35).
 # COORDINATOR overrides the binary (default target/release/coordinator).
 set -euo pipefail
 
