@@ -25,8 +25,9 @@ use amorph_coordinator::study::{
 
 type Key = (String, u32, u32, u64);
 
-/// One seed's runs: (seed, the baseline's, the policy's).
-type Pair = (u64, Reach, Reach);
+/// One seed's runs: (seed, the baseline's, the policy's, the policy's order against the
+/// baseline as far as the data fix it).
+type Pair = (u64, Reach, Reach, Option<Ordering>);
 
 /// A file's runs by (target, islands, population, seed); a key met twice is refused, since its
 /// pair would be ambiguous.
@@ -79,16 +80,20 @@ fn main() {
     let mut settings: BTreeMap<(&str, u32, u32), Vec<Pair>> = BTreeMap::new();
     for ((target, islands, population, seed), &with) in &policy {
         if let Some(&without) = baseline.get(&(target.clone(), *islands, *population, *seed)) {
-            (settings.entry((target, *islands, *population)).or_default())
-                .push((*seed, without, with));
+            (settings.entry((target, *islands, *population)).or_default()).push((
+                *seed,
+                without,
+                with,
+                paired_order(with, without),
+            ));
         }
     }
     let paired: usize = settings.values().map(Vec::len).sum();
     println!("| target | islands × population | seed | baseline | policy | first |");
     println!("|---|---|---|---|---|---|");
     for ((target, islands, population), pairs) in &settings {
-        for &(seed, without, with) in pairs {
-            let first = match paired_order(with, without) {
+        for &(seed, without, with, order) in pairs {
+            let first = match order {
                 Some(Ordering::Less) => "policy",
                 Some(Ordering::Greater) => "baseline",
                 Some(Ordering::Equal) => "same",
@@ -109,11 +114,7 @@ fn main() {
     let median = |runs: &[Reach]| Survival::new(runs).median();
     let shown = |m: Option<f64>| m.map_or("beyond".to_string(), |m| format!("{m:.0}"));
     for ((target, islands, population), pairs) in &settings {
-        let count = |o: Option<Ordering>| {
-            (pairs.iter())
-                .filter(|&&(_, without, with)| paired_order(with, without) == o)
-                .count() as u64
-        };
+        let count = |o: Option<Ordering>| pairs.iter().filter(|p| p.3 == o).count() as u64;
         let (wins, losses) = (count(Some(Ordering::Less)), count(Some(Ordering::Greater)));
         let without: Vec<Reach> = pairs.iter().map(|p| p.1).collect();
         let with: Vec<Reach> = pairs.iter().map(|p| p.2).collect();
