@@ -84,6 +84,12 @@ pub struct SearchSection {
     /// from the first epoch, as in the paper.
     #[serde(skip_serializing_if = "is_zero")]
     pub split_after_stall: usize,
+    /// Children whose design at the level's resolution is their dominant parent's are not
+    /// evaluated: they could not replace it, so the run breeds and replaces exactly as without
+    /// the key, on fewer evaluations (`search::unchanged`). Off by default: the paper evaluates
+    /// every child.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub skip_unchanged: bool,
     /// Gaussian points in each initial random genome.
     pub initial_points: usize,
     pub mutation: MutationParams,
@@ -114,6 +120,7 @@ impl Default for SearchSection {
             islands: 1,
             children_per_epoch: 50,
             split_after_stall: 0,
+            skip_unchanged: false,
             initial_points: 40,
             mutation: MutationParams::default(),
             migration: MigrationParams::default(),

@@ -37,6 +37,9 @@ pub struct RunSummary {
     pub stop: StopReason,
     pub epochs: usize,
     pub evaluations: u64,
+    /// Children not evaluated because they made their dominant parent's design
+    /// (`search.skip_unchanged`; 0 without it).
+    pub unchanged_children: u64,
     pub wall_seconds: f64,
     pub dims: GridDims,
     /// Every island's final population, in slot order.

@@ -117,6 +117,12 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         summary.stop,
         config.run_dir().display()
     );
+    if summary.unchanged_children > 0 {
+        println!(
+            "{} children made their dominant parent's design and were not evaluated (search.skip_unchanged)",
+            summary.unchanged_children
+        );
+    }
     if summary.stop == amorph_coordinator::StopReason::Shutdown {
         println!("stopped before its budget: continue it with --resume");
     }

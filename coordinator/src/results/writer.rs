@@ -200,6 +200,7 @@ impl ResultWriter {
             "stop": summary.stop,
             "epochs": summary.epochs,
             "evaluations": summary.evaluations,
+            "unchanged_children": summary.unchanged_children,
             "wall_seconds": summary.wall_seconds,
             "resolution": summary.dims.to_string(),
             "best_fitness": best.outcome.fitness(),

@@ -123,6 +123,7 @@ pub fn run(
         stop,
         epochs: search.epoch,
         evaluations: search.evaluations,
+        unchanged_children: search.unchanged_children,
         wall_seconds: search.clock.seconds(),
         dims,
         populations: search.islands.into_iter().map(|i| i.population).collect(),

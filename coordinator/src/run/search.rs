@@ -21,8 +21,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
-    BoundarySite, Breeding, Child, Individual, Island, ResolutionState, SharedBest, SplitWatch,
-    migrate,
+    BoundarySite, Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest,
+    SplitWatch, first_in_turn, keep_at_least_one, migrate,
 };
 use crate::store::{MigrationRecord, Purpose, StoredEvaluation};
 use crate::summary::fittest;
@@ -70,6 +70,11 @@ pub(super) struct Search {
     /// The next epoch's children, sent out beside a finest-level check
     /// (`resolution.overlap_finest_checks`) and waiting for the stall rule's verdict.
     overlap: Option<Overlap>,
+    /// With `search.skip_unchanged`: the parents' designs at this level, to tell the children
+    /// that make them.
+    parent_designs: Option<ParentDesigns>,
+    /// Children not evaluated because they made their dominant parent's design.
+    pub(super) unchanged_children: u64,
 }
 
 /// Wall time of the run across sessions: what earlier sessions used plus this session's time.
@@ -153,6 +158,8 @@ impl Search {
             checked_best: None,
             switch_unaffordable: false,
             overlap: None,
+            parent_designs: raw.search.skip_unchanged.then(ParentDesigns::default),
+            unchanged_children: 0,
         };
         let dims = raw.resolution.dims(0);
         let outcomes = evaluate_settled(
@@ -279,13 +286,20 @@ impl Search {
                 (local.insertion > 0.0).then(|| BoundarySite::new(&genome, &breeding.scene, dims));
             (holder, SharedBest { genome, slot, site })
         });
+        // Skipping unchanged children, every island breeds its whole share and the budget cuts
+        // the children left after the skip (`drop_unchanged`): what an epoch breeds then never
+        // depends on the budget, so a replay needs only the count the store recorded.
+        let skipping = self.parent_designs.is_some();
         let mut children: Vec<Vec<Child>> = self
             .islands
             .iter_mut()
             .enumerate()
             .map(|(i, island)| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
-                let count = (self.children_per_island as u64).min(share) as usize;
+                let count = match skipping {
+                    true => self.children_per_island,
+                    false => (self.children_per_island as u64).min(share) as usize,
+                };
                 island.breed(count, breeding, dims, shared.as_ref().map(|(_, s)| s))
             })
             .collect();
@@ -302,7 +316,48 @@ impl Search {
             }
             children[holder].extend(handed);
         }
+        if skipping {
+            self.drop_unchanged(&mut children, dims, left);
+        }
         children
+    }
+
+    /// Drops the children whose design is their dominant parent's (`search.skip_unchanged`),
+    /// counting the crossover children among them as tried for the step's adaptation, then all
+    /// but the first `left` of the rest in turn.
+    fn drop_unchanged(&mut self, children: &mut [Vec<Child>], dims: GridDims, left: u64) {
+        let designs = self.parent_designs.as_mut().expect("skipping unchanged");
+        let unchanged = designs.unchanged(&self.islands, children, &self.breeding.scene, dims);
+        let mut keep: Vec<Vec<bool>> = (unchanged.iter())
+            .map(|island| island.iter().map(|&u| !u).collect())
+            .collect();
+        keep_at_least_one(&mut keep);
+        let mut dropped = 0;
+        for ((island, children), (keep, unchanged)) in
+            (self.islands.iter_mut().zip(children.iter())).zip(keep.iter().zip(&unchanged))
+        {
+            let copies = (children.iter().zip(keep.iter().zip(unchanged)))
+                .filter(|(_, (kept, same))| **same && !**kept);
+            let (mut all, mut crossovers) = (0, 0);
+            for (child, _) in copies {
+                all += 1;
+                crossovers += usize::from(!child.nudge);
+            }
+            island.count_unchanged(crossovers);
+            dropped += all;
+        }
+        self.unchanged_children += dropped as u64;
+        if dropped > 0 {
+            info!(
+                epoch = self.epoch + 1,
+                dropped, "children that make their dominant parent's design not evaluated"
+            );
+        }
+        first_in_turn(&mut keep, left);
+        for (children, keep) in children.iter_mut().zip(keep) {
+            let mut keep = keep.into_iter();
+            children.retain(|_| keep.next().expect("one flag per child"));
+        }
     }
 
     /// Migration, when this epoch is one of its interval's.

@@ -314,6 +314,13 @@ impl Island {
         combined
     }
 
+    /// Counts crossover children of this epoch that were not evaluated because they make their
+    /// dominant parent's design (`search.skip_unchanged`): tried, and they did not replace it, so
+    /// the adapted step is what it would have been had they been evaluated.
+    pub fn count_unchanged(&mut self, crossovers: usize) {
+        self.last_success.1 += crossovers;
+    }
+
     /// Index of the fittest individual (the lowest index on a tie).
     pub fn best_index(&self) -> usize {
         let mut best = 0;

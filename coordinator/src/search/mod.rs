@@ -11,6 +11,7 @@ mod migration;
 mod resolution;
 mod split;
 mod stall;
+mod unchanged;
 mod variation;
 
 pub use diversity::{
@@ -24,4 +25,5 @@ pub use migration::{
 };
 pub use resolution::{ResolutionSchedule, ResolutionState, merge_order};
 pub use split::{SplitWatch, split_island};
+pub use unchanged::{ParentDesigns, first_in_turn, keep_at_least_one};
 pub use variation::{CrossoverParams, LocalSearchParams, StepAdaptation, StepRule, Variation};
