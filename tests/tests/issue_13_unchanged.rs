@@ -14,6 +14,19 @@ use std::path::Path;
 /// combined climb with insertions, the 1/5th-rule step (which counts the dropped crossover
 /// children as tried), migration into the most similar slot, a switch by the stall rule.
 fn config(results_dir: &Path, skip: bool, evaluations: u64, target: Option<f64>) -> RunConfig {
+    judged(results_dir, skip, evaluations, target, false)
+}
+
+/// [`config`], with `on_finest` the coarse level judged on the finest grid: each check there goes
+/// out with the next epoch's children, which the switch drops again (and with them the count of
+/// copies among them).
+fn judged(
+    results_dir: &Path,
+    skip: bool,
+    evaluations: u64,
+    target: Option<f64>,
+    on_finest: bool,
+) -> RunConfig {
     let target = target.map_or(String::new(), |t| format!("target_rms_percent = {t}"));
     let sections = format!(
         r#"
@@ -45,6 +58,7 @@ evaluations = {evaluations}
 levels = [[3, 9, 3], [4, 12, 4]]
 stall_epochs = 3
 min_improvement = 0.2
+stall_on_finest = {on_finest}
 "#
     );
     circular_arc(
@@ -72,14 +86,11 @@ fn epochs(summary: &RunSummary) -> Vec<HistoryRow> {
 /// from that run; it would need about 120 more to stop by its budget).
 const TARGET: f64 = 0.8;
 
-#[test]
-fn children_that_make_their_parents_design_are_dropped_and_nothing_else_changes() {
-    let evaluating = run_locally(
-        &config(&scratch_dir("unchanged-off"), false, 3000, Some(TARGET)),
-        1,
-    );
-    let (skipping, _) =
-        thread_count_blind("unchanged-on", |dir| config(dir, true, 3000, Some(TARGET)));
+/// Runs `make(dir, skip)` without and with the key (the latter on 1 and 3 threads) and checks the
+/// two are the same run on exactly the dropped children fewer evaluations.
+fn same_run_fewer_evaluations(test: &str, make: impl Fn(&Path, bool) -> RunConfig) {
+    let evaluating = run_locally(&make(&scratch_dir(&format!("{test}-off")), false), 1);
+    let (skipping, _) = thread_count_blind(&format!("{test}-on"), |dir| make(dir, true));
     assert_eq!(
         evaluating.stop,
         StopReason::TargetReached,
@@ -101,6 +112,22 @@ fn children_that_make_their_parents_design_are_dropped_and_nothing_else_changes(
         skipping.evaluations + skipping.unchanged_children,
         evaluating.evaluations
     );
+}
+
+#[test]
+fn children_that_make_their_parents_design_are_dropped_and_nothing_else_changes() {
+    same_run_fewer_evaluations("unchanged", |dir, skip| {
+        config(dir, skip, 3000, Some(TARGET))
+    });
+}
+
+/// The same with the coarse level judged on the finest grid, whose checks go out beside the next
+/// epoch's children: children bred ahead and dropped at the switch leave no count behind.
+#[test]
+fn copies_bred_ahead_of_a_switch_leave_no_trace() {
+    same_run_fewer_evaluations("unchanged-finest", |dir, skip| {
+        judged(dir, skip, 3000, Some(TARGET), true)
+    });
 }
 
 /// The evaluation count at the end of `epoch` in the run store under `dir`.

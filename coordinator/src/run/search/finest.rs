@@ -28,6 +28,9 @@ pub(super) struct Overlap {
     pub(super) held: Held,
     islands_before: Vec<Island>,
     next_task_before: u64,
+    /// The children dropped as copies of their parent so far (`search.skip_unchanged`), before
+    /// these were bred.
+    unchanged_before: u64,
 }
 
 impl Search {
@@ -59,18 +62,21 @@ impl Search {
             let dims = schedule.dims(self.resolution.level);
             let islands_before = self.islands.clone();
             let next_task_before = self.next_task;
+            let unchanged_before = self.unchanged_children;
             // The check is part of the budget the children share.
             let children = self.breed_children(config, dims, self.evaluations + 1);
             let genomes = genomes_of(&children);
-            (dims, children, genomes, islands_before, next_task_before)
+            let before = (islands_before, next_task_before, unchanged_before);
+            (dims, children, genomes, before)
         });
         if let Some((dims, _, genomes, ..)) = &ahead {
             parts.push(Part::number(self, genomes, *dims, Purpose::Child));
         }
         let (mut batches, held) = evaluate_parts(self, evaluator, parts, 1, ctx)?;
-        if let (Some((dims, children, genomes, islands_before, next_task_before)), Some(held)) =
+        if let (Some((dims, children, genomes, before)), Some(held)) =
             (ahead, held.into_iter().next())
         {
+            let (islands_before, next_task_before, unchanged_before) = before;
             let batch = batches.pop().expect("the children's part");
             self.overlap = Some(Overlap {
                 dims,
@@ -80,6 +86,7 @@ impl Search {
                 held,
                 islands_before,
                 next_task_before,
+                unchanged_before,
             });
         }
         let checked = batches.pop().expect("the check's part");
@@ -118,6 +125,7 @@ impl Search {
     pub(super) fn drop_overlap(&mut self, overlap: Overlap) {
         self.islands = overlap.islands_before;
         self.next_task = overlap.next_task_before;
+        self.unchanged_children = overlap.unchanged_before;
     }
 }
 
