@@ -296,9 +296,10 @@ impl Search {
             .enumerate()
             .map(|(i, island)| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
-                let count = match skipping {
-                    true => self.children_per_island,
-                    false => (self.children_per_island as u64).min(share) as usize,
+                let count = if skipping {
+                    self.children_per_island
+                } else {
+                    (self.children_per_island as u64).min(share) as usize
                 };
                 island.breed(count, breeding, dims, shared.as_ref().map(|(_, s)| s))
             })
@@ -332,21 +333,20 @@ impl Search {
             .map(|island| island.iter().map(|&u| !u).collect())
             .collect();
         keep_at_least_one(&mut keep);
-        let mut dropped = 0;
+        let mut dropped = 0u64;
         for ((island, children), (keep, unchanged)) in
             (self.islands.iter_mut().zip(children.iter())).zip(keep.iter().zip(&unchanged))
         {
-            let copies = (children.iter().zip(keep.iter().zip(unchanged)))
-                .filter(|(_, (kept, same))| **same && !**kept);
-            let (mut all, mut crossovers) = (0, 0);
-            for (child, _) in copies {
-                all += 1;
-                crossovers += usize::from(!child.nudge);
+            let mut crossovers = 0;
+            for ((child, &kept), &same) in children.iter().zip(keep).zip(unchanged) {
+                if same && !kept {
+                    dropped += 1;
+                    crossovers += usize::from(!child.nudge);
+                }
             }
             island.count_unchanged(crossovers);
-            dropped += all;
         }
-        self.unchanged_children += dropped as u64;
+        self.unchanged_children += dropped;
         if dropped > 0 {
             info!(
                 epoch = self.epoch + 1,
