@@ -1,333 +1,31 @@
-//! `worker --connect URL`: the stateless gRPC worker. It registers, leases tasks up to its free
-//! evaluation threads, evaluates them on the CPU pool, reports outcomes as they finish and
-//! heartbeats. When the coordinator goes away it keeps what it finished and reconnects with
-//! exponential backoff; on a stop signal it stops leasing, finishes or hands back its leases.
-//!
-//! A finished outcome is reported under the worker id its task was leased with, even after a
-//! re-registration: the coordinator accepts a late report once, so a network cut never throws a
-//! finished evaluation away.
+//! One session: a connection's lease, evaluate and report loop, and what a worker keeps when
+//! the connection goes.
 
-use std::collections::HashMap;
-use std::future::Future;
-use std::path::PathBuf;
-use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
 
-use amorph::task::Outcome;
 use amorph::task::Scene;
 use amorph_proto::ids::TaskId;
 use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
 use amorph_proto::v1::{self, task_result};
 use amorph_proto::{MAX_MESSAGE_BYTES, PROTOCOL_VERSION, convert};
-use tokio::sync::{mpsc, watch};
-use tonic::metadata::{Ascii, MetadataValue};
-use tonic::service::Interceptor;
-use tonic::service::interceptor::InterceptedService;
-use tonic::transport::{Certificate, Channel, ClientTlsConfig, Endpoint};
-use tonic::{Code, Request, Status};
+use tokio::sync::watch;
+use tonic::{Code, Status};
 use tracing::{debug, info, warn};
 
-use crate::pool::{EvaluationMode, Job, JobDone, Pool};
+use crate::pool::{Job, JobDone};
 
-/// How a worker connects and works.
-#[derive(Clone, Debug)]
-pub struct WorkerOptions {
-    /// `http://host:port`, or `https://host:port` with TLS.
-    pub url: String,
-    /// Evaluations at once (its capacity).
-    pub threads: usize,
-    /// Threads that share one evaluation (1: each evaluation on its own thread). The outcome is
-    /// the same bits for any count (`amorph::dynamics`); more pays where evaluations are fewer
-    /// than cores, e.g. large robots or a batch smaller than the cluster.
-    pub threads_per_evaluation: usize,
-    /// Shown in the coordinator's logs and run store.
-    pub name: String,
-    /// The shared secret, if the coordinator requires one.
-    pub token: Option<String>,
-    /// PEM certificate of the authority that signed the coordinator's certificate (TLS).
-    pub ca_cert: Option<PathBuf>,
-    /// Name to check the coordinator's certificate against, if not the URL's host.
-    pub tls_domain: Option<String>,
-    pub mode: EvaluationMode,
-    /// Longest wait between reconnection attempts.
-    pub max_backoff: Duration,
-    /// Give up after this long without reaching the coordinator (None: never).
-    pub give_up_after: Option<Duration>,
-    /// Exit once the coordinator says the run has finished (else wait for the next run).
-    pub exit_when_finished: bool,
-    /// On a stop signal, how long to let running evaluations finish before handing them back.
-    pub grace: Duration,
-    /// Bytes all evaluations at once may use (None: half the machine's memory); a task whose
-    /// estimate exceeds its share (this divided by `threads`) is refused, not started.
-    pub max_memory: Option<u64>,
-}
-
-/// Most evaluation threads a worker may run (the coordinator's largest capacity).
-pub const MAX_THREADS: usize = 1024;
-
-impl WorkerOptions {
-    pub fn new(url: impl Into<String>, threads: usize) -> Self {
-        Self {
-            url: url.into(),
-            threads: threads.max(1),
-            threads_per_evaluation: 1,
-            name: default_name(),
-            token: None,
-            ca_cert: None,
-            tls_domain: None,
-            mode: EvaluationMode::Physics,
-            max_backoff: Duration::from_secs(10),
-            give_up_after: None,
-            exit_when_finished: true,
-            grace: Duration::from_secs(30),
-            max_memory: None,
-        }
-    }
-}
-
-fn default_name() -> String {
-    let host = std::env::var("HOSTNAME")
-        .ok()
-        .or_else(|| std::fs::read_to_string("/etc/hostname").ok())
-        .map(|h| h.trim().to_owned())
-        .filter(|h| !h.is_empty())
-        .unwrap_or_else(|| "worker".into());
-    format!("{host}:{}", std::process::id())
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum ClientError {
-    #[error("coordinator {url} refused this worker: {message}")]
-    Refused { url: String, message: String },
-    #[error("{0}")]
-    Setup(String),
-    #[error("coordinator {url} unreachable for {seconds:.0} s: {last}")]
-    GaveUp {
-        url: String,
-        seconds: f64,
-        last: String,
-    },
-}
-
-/// What a worker did, for its exit line and tests.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct WorkerSummary {
-    pub evaluated: u64,
-    pub reported: u64,
-    pub duplicates: u64,
-    pub released: u64,
-    pub sessions: u64,
-}
-
-/// Metadata every call carries: the token.
-#[derive(Clone, Debug)]
-struct Auth {
-    token: Option<MetadataValue<Ascii>>,
-}
-
-impl Interceptor for Auth {
-    fn call(&mut self, mut request: Request<()>) -> Result<Request<()>, Status> {
-        if let Some(token) = &self.token {
-            request
-                .metadata_mut()
-                .insert(amorph_proto::AUTHORIZATION, token.clone());
-        }
-        Ok(request)
-    }
-}
-
-type Client = EvaluationCoordinatorClient<InterceptedService<Channel, Auth>>;
-type LeaseCall =
-    Pin<Box<dyn Future<Output = Result<tonic::Response<v1::LeaseResponse>, Status>> + Send>>;
-
-/// A result waiting to be reported, with the worker id its task was leased under.
-#[derive(Debug)]
-struct Finished {
-    lease_id: String,
-    task_id: TaskId,
-    result: Result<Outcome, String>,
-    wall_seconds: f64,
-}
-
-/// Everything that survives a reconnection.
-struct Worker {
-    opts: WorkerOptions,
-    endpoint: Endpoint,
-    auth: Auth,
-    pool: Pool,
-    /// Bytes one evaluation may use.
-    evaluation_budget: u64,
-    done: mpsc::UnboundedReceiver<JobDone>,
-    /// Tasks on the pool, with the worker id they were leased under.
-    active: HashMap<TaskId, String>,
-    unreported: Vec<Finished>,
-    scenes: HashMap<String, Arc<Scene>>,
-    stopping: bool,
-    summary: WorkerSummary,
-}
-
-enum Event {
-    Leased(Result<tonic::Response<v1::LeaseResponse>, Status>),
-    Done(JobDone),
-    Heartbeat,
-    Stop(bool),
-    GraceOver,
-}
-
-enum SessionEnd {
-    RunFinished,
-    Stopped,
-}
-
-/// Why a session ended early: reconnect, or give up for good.
-enum SessionError {
-    Retry(String),
-    Fatal(ClientError),
-}
-
-/// Runs a worker until the run finishes (if `exit_when_finished`), a stop is requested, or the
-/// coordinator refuses it.
-pub async fn run_worker(
-    opts: WorkerOptions,
-    mut stop: watch::Receiver<bool>,
-) -> Result<WorkerSummary, ClientError> {
-    let endpoint = endpoint(&opts)?;
-    let auth = Auth {
-        token: opts
-            .token
-            .as_deref()
-            .map(|t| {
-                format!("Bearer {t}")
-                    .parse()
-                    .map_err(|_| ClientError::Setup("the token must be printable ASCII".into()))
-            })
-            .transpose()?,
-    };
-    if opts.threads > MAX_THREADS {
-        return Err(ClientError::Setup(format!(
-            "--threads {}: at most {MAX_THREADS}",
-            opts.threads
-        )));
-    }
-    let (done_tx, done) = mpsc::unbounded_channel();
-    let pool = Pool::new(
-        opts.threads,
-        opts.threads_per_evaluation,
-        opts.mode,
-        done_tx,
-    )
-    .map_err(|e| {
-        ClientError::Setup(format!(
-            "starting {} evaluation threads of {} each: {e}",
-            opts.threads, opts.threads_per_evaluation
-        ))
-    })?;
-    let mut worker = Worker {
-        evaluation_budget: opts
-            .max_memory
-            .unwrap_or_else(amorph::task::memory::default_budget)
-            / opts.threads as u64,
-        pool,
-        opts,
-        endpoint,
-        auth,
-        done,
-        active: HashMap::new(),
-        unreported: Vec::new(),
-        scenes: HashMap::new(),
-        stopping: false,
-        summary: WorkerSummary::default(),
-    };
-    let mut backoff = Duration::from_millis(100);
-    let mut unreachable_since: Option<tokio::time::Instant> = None;
-    loop {
-        if *stop.borrow() {
-            worker.stopping = true;
-        }
-        match worker.session(&mut stop).await {
-            Ok(SessionEnd::Stopped) => return Ok(worker.summary),
-            Ok(SessionEnd::RunFinished) if worker.opts.exit_when_finished => {
-                return Ok(worker.summary);
-            }
-            Ok(SessionEnd::RunFinished) => {
-                backoff = Duration::from_millis(100);
-                unreachable_since = None;
-                sleep_or_stop(Duration::from_secs(1), &mut stop).await;
-            }
-            Err(SessionError::Fatal(e)) => return Err(e),
-            Err(SessionError::Retry(reason)) => {
-                if worker.stopping && worker.active.is_empty() && worker.unreported.is_empty() {
-                    return Ok(worker.summary);
-                }
-                let since = *unreachable_since.get_or_insert_with(tokio::time::Instant::now);
-                if let Some(limit) = worker.opts.give_up_after
-                    && since.elapsed() >= limit
-                {
-                    return Err(ClientError::GaveUp {
-                        url: worker.opts.url.clone(),
-                        seconds: since.elapsed().as_secs_f64(),
-                        last: reason,
-                    });
-                }
-                warn!(url = %worker.opts.url, %reason, retry_in_ms = backoff.as_millis() as u64, "coordinator unreachable: reconnecting");
-                sleep_or_stop(backoff, &mut stop).await;
-                backoff = (backoff * 2).min(worker.opts.max_backoff);
-                continue;
-            }
-        }
-    }
-}
-
-async fn sleep_or_stop(duration: Duration, stop: &mut watch::Receiver<bool>) {
-    tokio::select! {
-        _ = tokio::time::sleep(duration) => {}
-        _ = stop.changed() => {}
-    }
-}
-
-fn endpoint(opts: &WorkerOptions) -> Result<Endpoint, ClientError> {
-    let mut endpoint = Endpoint::from_shared(opts.url.clone())
-        .map_err(|e| ClientError::Setup(format!("--connect {}: {e}", opts.url)))?
-        .connect_timeout(Duration::from_secs(5))
-        .tcp_nodelay(true)
-        .http2_keep_alive_interval(Duration::from_secs(10))
-        .keep_alive_timeout(Duration::from_secs(10));
-    if opts.url.starts_with("https://") || opts.ca_cert.is_some() {
-        let mut tls = ClientTlsConfig::new();
-        if let Some(ca) = &opts.ca_cert {
-            let pem = std::fs::read(ca)
-                .map_err(|e| ClientError::Setup(format!("--ca {}: {e}", ca.display())))?;
-            tls = tls.ca_certificate(Certificate::from_pem(pem));
-        }
-        if let Some(domain) = &opts.tls_domain {
-            tls = tls.domain_name(domain.clone());
-        }
-        endpoint = endpoint
-            .tls_config(tls)
-            .map_err(|e| ClientError::Setup(format!("TLS for {}: {e}", opts.url)))?;
-    }
-    Ok(endpoint)
-}
-
-/// A refusal no retry can fix: wrong token, wrong protocol version, a request the coordinator
-/// calls invalid.
-fn is_fatal(status: &Status) -> bool {
-    matches!(
-        status.code(),
-        Code::Unauthenticated
-            | Code::PermissionDenied
-            | Code::FailedPrecondition
-            | Code::InvalidArgument
-    )
-}
+use super::connection::is_fatal;
+use super::{
+    Client, ClientError, Event, Finished, LeaseCall, SessionEnd, SessionError, Worker, wire_ids,
+};
 
 impl Worker {
     fn free_slots(&self) -> u32 {
         self.pool.threads().saturating_sub(self.active.len()) as u32
     }
 
-    async fn session(
+    pub(super) async fn session(
         &mut self,
         stop: &mut watch::Receiver<bool>,
     ) -> Result<SessionEnd, SessionError> {
@@ -651,9 +349,4 @@ impl Worker {
         }
         Ok(())
     }
-}
-
-/// Task ids as the wire carries them.
-fn wire_ids(ids: &[TaskId]) -> Vec<u64> {
-    ids.iter().map(|id| id.0).collect()
 }
