@@ -69,6 +69,8 @@ fn main() {
             insertion: v.get(3).copied().unwrap_or(0.0),
             shared: false,
             combine: false,
+            combinations: 1,
+            rebase: false,
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let (mut best, mut best_outcome) = (genome.clone(), start.clone());

@@ -77,6 +77,47 @@ fn a_shared_climb_is_bit_identical_on_1_and_3_threads_and_never_loses_the_best()
     );
 }
 
+/// Several combinations, built on the design that won the slot (`combinations = 3`, `rebase =
+/// true`, session 37): the shared climb stays bit-identical on 1 and 3 threads and when stopped
+/// and resumed (the offered designs are rebuilt from the replayed epoch), the keys reach the
+/// search (the run is not the one-combination run), and `combinations = 1` without `rebase` is the
+/// one-combination run to the bit.
+#[test]
+fn several_rebased_combinations_are_bit_identical_on_threads_and_resume() {
+    let climb = "insertion = 0.5\nshared = true\ncombine = true";
+    let several = format!("{climb}\ncombinations = 3\nrebase = true");
+    // Most children nudge the best, as in the arc's runs (half there, of larger epochs), so that
+    // epochs have several improving nudges to add up.
+    let config = |dir: &Path, keys: &str| {
+        let mut config = config(dir, 7, keys);
+        config.raw.search.local_search.fraction = 0.8;
+        config
+    };
+    let run = |name: &str, keys: &str, threads: usize| {
+        fingerprint(&run_locally(&config(&scratch_dir(name), keys), threads))
+    };
+    let one = run("combinations-1", &several, 1);
+    assert!(
+        one == run("combinations-3", &several, 3),
+        "1 and 3 threads differ"
+    );
+    let old = run("combinations-old", climb, 1);
+    assert!(one != old, "three rebased combinations breed another run");
+    let explicit = format!("{climb}\ncombinations = 1\nrebase = false");
+    assert!(
+        old == run("combinations-explicit", &explicit, 2),
+        "the defaults changed the run"
+    );
+
+    // Stopped at the end of an epoch (30 initial + 3 epochs of 30) and resumed to 240.
+    let dir = scratch_dir("combinations-resumed");
+    let mut stopped = config(&dir, &several);
+    stopped.raw.budget.evaluations = Some(120);
+    assert_eq!(run_locally(&stopped, 2).evaluations, 120);
+    let resumed = resume_locally(&config(&dir, &several), 3);
+    assert!(fingerprint(&resumed) == one, "the resumed run differs");
+}
+
 #[test]
 fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];

@@ -203,8 +203,8 @@ impl Search {
         evaluator: &mut dyn Evaluator,
         ctx: &RunContext<'_>,
     ) -> Result<Vec<usize>> {
-        let combine = (self.breeding.variation.local_search.combine)
-            .then_some(self.breeding.scene.limits().max_points);
+        let combine = (self.breeding.variation.local_search)
+            .combining(self.breeding.scene.limits().max_points);
         let (children, genomes, batch) = match self.overlap.take() {
             Some(overlap) if overlap.dims == dims => {
                 overlap.held.keep(self, ctx)?;

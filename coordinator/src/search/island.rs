@@ -15,7 +15,7 @@ use amorph::voxel::GridDims;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use super::combination::combine;
+use super::combination::{Combining, combinations};
 use super::insertion::BoundarySite;
 use super::variation::Variation;
 use crate::ids::{IslandId, TaskId};
@@ -72,8 +72,8 @@ pub struct Island {
     /// Crossover children of the last epoch that replaced their dominant parent, and how many
     /// there were: the evidence the step adapts to.
     last_success: (usize, usize),
-    /// The last epoch's improving nudges applied together, offered as the first nudge of the next.
-    combination: Option<Genome>,
+    /// The last epoch's improving nudges applied together, offered as the first nudges of the next.
+    combinations: Vec<Genome>,
 }
 
 impl Island {
@@ -104,7 +104,7 @@ impl Island {
             rng,
             step_scale: 1.0,
             last_success: (0, 0),
-            combination: None,
+            combinations: Vec::new(),
         }
     }
 
@@ -157,9 +157,10 @@ impl Island {
         };
         // The combination judges against this island's own best, whatever `shared` says: the
         // nudges it adds up were judged here, so this island holds their lineage.
-        let combination = self.combination.take().filter(|_| nudges > 0);
-        let offered = usize::from(combination.is_some());
-        if let Some(genome) = combination {
+        let mut combined = std::mem::take(&mut self.combinations);
+        combined.truncate(nudges);
+        let offered = combined.len();
+        for genome in combined {
             children.push(Child {
                 genome,
                 dominant_parent: self.best_index(),
@@ -248,19 +249,18 @@ impl Island {
     }
 
     /// Applies an epoch's evaluated children in order ([`Island::winners`]). Returns how many
-    /// replaced their dominant parent. With `combine` (`local_search.combine`), first adds up the
+    /// replaced their dominant parent. With `combine` (`local_search.combine`), also adds up the
     /// nudges that beat the design they were nudged from, for the next epoch.
     pub fn apply(
         &mut self,
         children: Vec<Child>,
         outcomes: Vec<(TaskId, Outcome)>,
-        combine: Option<usize>,
+        combine: Option<Combining>,
     ) -> usize {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
         let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
         let wins = self.winners(&children, &refs);
-        self.combination = combine
-            .and_then(|max_points| self.combine_improving_nudges(&children, &refs, max_points));
+        let improving = combine.and_then(|c| Some((c, self.improving_nudges(&children, &refs)?)));
         let mut replaced = 0;
         for ((child, (task, outcome)), wins) in children.into_iter().zip(outcomes).zip(wins) {
             if child.combined {
@@ -279,18 +279,25 @@ impl Island {
                 replaced += 1;
             }
         }
+        self.combinations = improving.map_or_else(Vec::new, |(combining, (slot, base, genomes))| {
+            let refs: Vec<&Genome> = genomes.iter().collect();
+            let offered = combinations(&base, &self.population[slot].genome, &refs, &combining);
+            if !offered.is_empty() {
+                info!(island = %self.id, improving = refs.len(), offered = offered.len(), "improving nudges combined");
+            }
+            offered
+        });
         replaced
     }
 
     /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
     /// their dominant parent's slot, before any child of the epoch is applied), fittest first
-    /// (child order on a tie), added up by [`combine`].
-    fn combine_improving_nudges(
+    /// (child order on a tie): their slot, that design, and their genomes. `None` without one.
+    fn improving_nudges(
         &self,
         children: &[Child],
         outcomes: &[&Outcome],
-        max_points: usize,
-    ) -> Option<Genome> {
+    ) -> Option<(usize, Genome, Vec<Genome>)> {
         let mut improving: Vec<(usize, &Child)> = children
             .iter()
             .enumerate()
@@ -303,15 +310,10 @@ impl Island {
         // Nudges of one epoch share one base (the island's best, or the run's under `shared`).
         let slot = improving.first()?.1.dominant_parent;
         improving.retain(|(_, c)| c.dominant_parent == slot);
-        let base = &self.population[slot].genome;
         // A stable sort, so ties keep child order.
         improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
-        let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
-        let combined = combine(base, &genomes, max_points);
-        if combined.is_some() {
-            info!(island = %self.id, improving = genomes.len(), "improving nudges combined");
-        }
-        combined
+        let genomes = improving.iter().map(|(_, c)| c.genome.clone()).collect();
+        Some((slot, self.population[slot].genome.clone(), genomes))
     }
 
     /// Counts crossover children of this epoch that were not evaluated because they make their

@@ -9,6 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::combination::Combining;
 use super::insertion::BoundarySite;
 
 /// A (1+λ) evolution strategy inside crowding: some children of every epoch are the island's best
@@ -41,6 +42,12 @@ pub struct LocalSearchParams {
     /// offered as the first nudge of the next epoch (`search::combination`): the climb can then
     /// take several steps per epoch instead of one.
     pub combine: bool,
+    /// With `combine`: how many combined designs an epoch offers, all the improving nudges, then
+    /// the fittest half, quarter, ... (distinct ones only; 1: all of them, the session-13 rule).
+    pub combinations: usize,
+    /// With `combine`: the combined designs are built on the design that holds the nudges' slot
+    /// after the epoch (a point it changed keeps its change) instead of the one they started from.
+    pub rebase: bool,
 }
 
 impl Default for LocalSearchParams {
@@ -53,11 +60,22 @@ impl Default for LocalSearchParams {
             insertion: 0.0,
             shared: false,
             combine: false,
+            combinations: 1,
+            rebase: false,
         }
     }
 }
 
 impl LocalSearchParams {
+    /// How an epoch's improving nudges are added up, or `None` without `combine`.
+    pub fn combining(&self, max_points: usize) -> Option<Combining> {
+        self.combine.then_some(Combining {
+            max_points,
+            combinations: self.combinations,
+            rebase: self.rebase,
+        })
+    }
+
     /// How many of `count` children are nudges of the best (the rest are bred as in the paper).
     pub fn nudges(&self, count: usize) -> usize {
         ((self.fraction * count as f64).round() as usize).min(count)
@@ -122,6 +140,9 @@ impl Default for StepAdaptation {
         }
     }
 }
+
+/// More combined designs than this would halve the fittest nudge down to one long before.
+const MAX_COMBINATIONS: usize = 16;
 
 /// The success rate that separates growing from shrinking under the 1/5th rule.
 const ONE_FIFTH: f64 = 0.2;
@@ -189,6 +210,17 @@ impl Variation {
         }
         if !(l.step.is_finite() && l.step > 0.0) {
             return Err("search.local_search.step must be a positive number".into());
+        }
+        if !(1..=MAX_COMBINATIONS).contains(&l.combinations) {
+            return Err(format!(
+                "search.local_search.combinations must be between 1 and {MAX_COMBINATIONS}"
+            ));
+        }
+        if !l.combine && (l.combinations != 1 || l.rebase) {
+            return Err(
+                "search.local_search.combinations and rebase need search.local_search.combine = true"
+                    .into(),
+            );
         }
         let a = &self.step_adaptation;
         if !(a.factor.is_finite() && a.factor > 1.0) {
@@ -275,6 +307,29 @@ mod tests {
             v.validate()
                 .unwrap_err()
                 .contains("search.step_adaptation.factor")
+        );
+        v = Variation::default();
+        v.local_search.combine = true;
+        v.local_search.combinations = 0;
+        assert!(
+            v.validate()
+                .unwrap_err()
+                .contains("search.local_search.combinations must be between 1 and 16")
+        );
+        v.local_search.combinations = 3;
+        assert!(v.validate().is_ok());
+        v.local_search.combine = false;
+        assert!(
+            v.validate()
+                .unwrap_err()
+                .contains("need search.local_search.combine = true")
+        );
+        v = Variation::default();
+        v.local_search.rebase = true;
+        assert!(
+            v.validate()
+                .unwrap_err()
+                .contains("combinations and rebase")
         );
         v = Variation::default();
         v.local_search.fraction = f64::NAN;

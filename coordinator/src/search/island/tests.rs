@@ -95,6 +95,8 @@ fn nudges_are_the_best_with_only_continuous_parameters_moved() {
             insertion: 0.0,
             shared: false,
             combine: false,
+            combinations: 1,
+            rebase: false,
         },
         ..Default::default()
     });
@@ -236,7 +238,10 @@ fn improving_nudges_return_added_up_as_the_next_epochs_first_nudge() {
         ..Default::default()
     });
     let (children, outcomes) = epoch();
-    assert_eq!(isl.apply(children, outcomes, Some(64)), 1);
+    assert_eq!(
+        isl.apply(children, outcomes, b.variation.local_search.combining(64)),
+        1
+    );
     let next = isl.breed(3, &b, DIMS, None);
     let first = &next[0];
     assert!(first.nudge && first.combined);

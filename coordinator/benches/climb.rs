@@ -1,0 +1,119 @@
+//! The shared climb alone, from one design, under different ways of adding up its nudges (issue
+//! 13, session 37; figures in docs/evolution.md).
+//!
+//! `cargo bench -p amorph-coordinator --bench climb -- <design.json> <config.toml> <epochs>
+//! <nudges> <seeds> <combinations>,<rebase> [...]`: for each setting (`1,0` is the session-13
+//! rule: one combination of every improving nudge, on the design they started from) and each seed
+//! of the comma-separated list, an island holding only the design in `design.json` (a
+//! `best_genome.json` or a test fixture: genome and resolution) breeds `nudges` nudges an epoch
+//! with the `[search.local_search]` keys of `config.toml` (`fraction` 1, `combine` on) and keeps
+//! the fittest, as the run's climb does in the island that holds the best. Prints, per setting
+//! and seed, the figure (RMS error for a beam) every ten epochs and the evaluations spent. The
+//! same arguments give the same lines: the island's stream is the seed, and every child is
+//! evaluated whatever the number of threads.
+
+use std::sync::Arc;
+
+use amorph::genome::Genome;
+use amorph::task::Outcome;
+use amorph::voxel::GridDims;
+use amorph_coordinator::RunConfig;
+use amorph_coordinator::ids::{IslandId, TaskId};
+use amorph_coordinator::search::{Breeding, Individual, Island};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    if args.len() < 6 {
+        eprintln!(
+            "usage: climb <design.json> <config.toml> <epochs> <nudges> <seed,seed,...> <combinations>,<rebase>..."
+        );
+        std::process::exit(2);
+    }
+    let design: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&args[0]).expect("design file"))
+            .expect("design JSON");
+    let genome: Genome = serde_json::from_value(design["genome"].clone()).expect("a genome");
+    let r: Vec<usize> = serde_json::from_value(design["resolution"].clone()).expect("a resolution");
+    let dims = GridDims::new(r[0], r[1], r[2]);
+    let config = RunConfig::load(std::path::Path::new(&args[1])).expect("config");
+    let scene = Arc::new(config.raw.scene.clone());
+    let epochs: usize = args[2].parse().expect("epochs");
+    let nudges: usize = args[3].parse().expect("nudges");
+    let seeds: Vec<u64> = (args[4].split(','))
+        .map(|s| s.parse().expect("a seed"))
+        .collect();
+    let figure = |o: &Outcome| scene.figure(o).unwrap_or(f64::NAN);
+    let start = scene.evaluate(&genome, dims);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for setting in &args[5..] {
+        let v: Vec<usize> = (setting.split(','))
+            .map(|s| s.parse().expect("a number"))
+            .collect();
+        let mut variation = config.raw.search.variation();
+        let local = &mut variation.local_search;
+        (local.fraction, local.combine, local.shared) = (1.0, true, false);
+        (local.combinations, local.rebase) = (v[0], v[1] != 0);
+        variation.validate().expect("a valid setting");
+        let combining = variation.local_search.combining(scene.limits().max_points);
+        let breeding = Breeding {
+            mutation: config.raw.search.mutation.clone(),
+            variation,
+            scene: scene.clone(),
+        };
+        for &seed in &seeds {
+            let first = Individual {
+                genome: genome.clone(),
+                outcome: start.clone(),
+                task: TaskId(0),
+            };
+            let mut island =
+                Island::from_evaluated(IslandId(0), ChaCha8Rng::seed_from_u64(seed), vec![first]);
+            let mut line = format!("{setting} seed {seed}: {:.4}", figure(&start));
+            let mut task = 0;
+            for epoch in 1..=epochs {
+                let children = island.breed(nudges, &breeding, dims, None);
+                let outcomes = evaluate(&scene, &children, dims, threads);
+                let outcomes = (outcomes.into_iter())
+                    .map(|o| {
+                        task += 1;
+                        (TaskId(task), o)
+                    })
+                    .collect();
+                island.apply(children, outcomes, combining);
+                if epoch % 10 == 0 {
+                    line += &format!(" {:.4}", figure(&island.best().outcome));
+                }
+            }
+            println!("{line} ({task} evaluations)");
+        }
+    }
+}
+
+/// Every child's outcome, in child order, on `threads` threads.
+fn evaluate(
+    scene: &amorph::task::Scene,
+    children: &[amorph_coordinator::search::Child],
+    dims: GridDims,
+    threads: usize,
+) -> Vec<Outcome> {
+    let chunk = children.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (children.chunks(chunk))
+            .map(|part| {
+                s.spawn(move || {
+                    (part.iter())
+                        .map(|c| scene.evaluate(&c.genome, dims))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        (handles.into_iter())
+            .flat_map(|h| h.join().expect("an evaluation thread"))
+            .collect()
+    })
+}
