@@ -8,7 +8,8 @@
 //! `best_genome.json` or a test fixture: genome and resolution) breeds `nudges` nudges an epoch
 //! with the `[search.local_search]` keys of `config.toml` (`fraction` 1, `combine` on) and keeps
 //! the fittest, as the run's climb does in the island that holds the best. Prints, per setting
-//! and seed, the figure (RMS error for a beam) every ten epochs and the evaluations spent. The
+//! and seed, the figure (RMS error for a beam) every ten epochs, the evaluations spent, and how
+//! often a combined design held the best at an epoch's end. The
 //! same arguments give the same lines: the island's stream is the seed, and every child is
 //! evaluated whatever the number of threads.
 
@@ -74,10 +75,14 @@ fn main() {
             let mut island =
                 Island::from_evaluated(IslandId(0), ChaCha8Rng::seed_from_u64(seed), vec![first]);
             let mut line = format!("{setting} seed {seed}: {:.4}", figure(&start));
-            let mut task = 0;
+            let (mut task, mut offered, mut won) = (0, 0, 0);
             for epoch in 1..=epochs {
                 let children = island.breed(nudges, &breeding, dims, None);
                 let outcomes = evaluate(&scene, &children, dims, threads);
+                let combined: Vec<u64> = (children.iter().enumerate())
+                    .filter(|(_, c)| c.combined)
+                    .map(|(k, _)| task + 1 + k as u64)
+                    .collect();
                 let outcomes = (outcomes.into_iter())
                     .map(|o| {
                         task += 1;
@@ -85,11 +90,15 @@ fn main() {
                     })
                     .collect();
                 island.apply(children, outcomes, combining);
+                offered += combined.len();
+                won += usize::from(combined.contains(&island.best().task.0));
                 if epoch % 10 == 0 {
                     line += &format!(" {:.4}", figure(&island.best().outcome));
                 }
             }
-            println!("{line} ({task} evaluations)");
+            println!(
+                "{line} ({task} evaluations; {offered} combined designs offered, one held the best after {won} epochs)"
+            );
         }
     }
 }
