@@ -13,35 +13,24 @@
 //! same arguments give the same lines: the island's stream is the seed, and every child is
 //! evaluated whatever the number of threads.
 
+#[path = "common/design.rs"]
+mod design;
+
 use std::sync::Arc;
 
-use amorph::genome::Genome;
 use amorph::task::Outcome;
 use amorph::voxel::GridDims;
-use amorph_coordinator::RunConfig;
 use amorph_coordinator::ids::{IslandId, TaskId};
 use amorph_coordinator::search::{Breeding, Individual, Island};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 fn main() {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| a != "--bench")
-        .collect();
-    if args.len() < 6 {
-        eprintln!(
-            "usage: climb <design.json> <config.toml> <epochs> <nudges> <seed,seed,...> <combinations>,<rebase>..."
-        );
-        std::process::exit(2);
-    }
-    let design: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&args[0]).expect("design file"))
-            .expect("design JSON");
-    let genome: Genome = serde_json::from_value(design["genome"].clone()).expect("a genome");
-    let r: Vec<usize> = serde_json::from_value(design["resolution"].clone()).expect("a resolution");
-    let dims = GridDims::new(r[0], r[1], r[2]);
-    let config = RunConfig::load(std::path::Path::new(&args[1])).expect("config");
+    let args = design::arguments(
+        6,
+        "climb <design.json> <config.toml> <epochs> <nudges> <seed,seed,...> <combinations>,<rebase>...",
+    );
+    let (genome, dims, config) = design::load(&args[0], &args[1]);
     let scene = Arc::new(config.raw.scene.clone());
     let epochs: usize = args[2].parse().expect("epochs");
     let nudges: usize = args[3].parse().expect("nudges");

@@ -14,34 +14,23 @@
 //! this climb cannot reach, so where it stalls says how far the resolution, not the search, limits
 //! the figure.
 
+#[path = "common/design.rs"]
+mod design;
+
 use amorph::genome::Genome;
 use amorph::task::Outcome;
 use amorph::task::{Scene, Task};
-use amorph::voxel::GridDims;
 use amorph::voxel::VoxelGrid;
-use amorph_coordinator::RunConfig;
 use amorph_coordinator::search::{BoundarySite, LocalSearchParams, other_state};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn main() {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| a != "--bench")
-        .collect();
-    if args.len() < 4 {
-        eprintln!(
-            "usage: nudge <design.json> <config.toml> <evaluations> <points>,<probability>,<step>[,<insertion>]... | voxels"
-        );
-        std::process::exit(2);
-    }
-    let design: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&args[0]).expect("design file"))
-            .expect("design JSON");
-    let genome: Genome = serde_json::from_value(design["genome"].clone()).expect("a genome");
-    let r: Vec<usize> = serde_json::from_value(design["resolution"].clone()).expect("a resolution");
-    let dims = GridDims::new(r[0], r[1], r[2]);
-    let config = RunConfig::load(std::path::Path::new(&args[1])).expect("config");
+    let args = design::arguments(
+        4,
+        "nudge <design.json> <config.toml> <evaluations> <points>,<probability>,<step>[,<insertion>]... | voxels",
+    );
+    let (genome, dims, config) = design::load(&args[0], &args[1]);
     let scene = &config.raw.scene;
     let evaluations: usize = args[2].parse().expect("evaluations");
     let figure = |o: &Outcome| scene.figure(o).unwrap_or(f64::NAN);
