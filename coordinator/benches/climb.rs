@@ -2,13 +2,14 @@
 //! 13, session 37; figures in docs/evolution.md).
 //!
 //! `cargo bench -p amorph-coordinator --bench climb -- <design.json> <config.toml> <epochs>
-//! <nudges> <seeds> <combinations>,<rebase> [...]`: for each setting (`1,0` is the session-13
-//! rule: one combination of every improving nudge, on the design they started from) and each seed
+//! <nudges> <seeds> <combinations>,<rebase>[,<K>,<R>] [...]`: for each setting (`1,0` is the
+//! session-13 rule: one combination of every improving nudge, on the design they started from;
+//! `K`, `R` make it a race of K climbs for R epochs, the best one going on) and each seed
 //! of the comma-separated list, an island holding only the design in `design.json` (a
 //! `best_genome.json` or a test fixture: genome and resolution) breeds `nudges` nudges an epoch
 //! with the `[search.local_search]` keys of `config.toml` (`fraction` 1, `combine` on) and keeps
 //! the fittest, as the run's climb does in the island that holds the best. Prints, per setting
-//! and seed, the figure (RMS error for a beam) every ten epochs, the evaluations spent, and how
+//! and seed, the figure (RMS error for a beam) every ten epochs and at the end, the evaluations spent, and how
 //! often a combined design held the best at an epoch's end. The
 //! same arguments give the same lines: the island's stream is the seed, and every child is
 //! evaluated whatever the number of threads.
@@ -55,40 +56,100 @@ fn main() {
             variation,
             scene: scene.clone(),
         };
+        // A race (`K`, `R` after the two keys): K climbs from the design, on streams of their own,
+        // for R epochs; the one with the best design goes on alone. Its evaluations count all K.
+        let (racers, race_epochs) = (
+            v.get(2).copied().unwrap_or(1),
+            v.get(3).copied().unwrap_or(0),
+        );
         for &seed in &seeds {
-            let first = Individual {
-                genome: genome.clone(),
-                outcome: start.clone(),
-                task: TaskId(0),
+            let climb = |k: u64| Climb {
+                island: Island::from_evaluated(
+                    IslandId(0),
+                    ChaCha8Rng::seed_from_u64(seed + 1000 * k),
+                    vec![Individual {
+                        genome: genome.clone(),
+                        outcome: start.clone(),
+                        task: TaskId(0),
+                    }],
+                ),
+                task: 0,
+                offered: 0,
+                won: 0,
             };
-            let mut island =
-                Island::from_evaluated(IslandId(0), ChaCha8Rng::seed_from_u64(seed), vec![first]);
             let mut line = format!("{setting} seed {seed}: {:.4}", figure(&start));
-            let (mut task, mut offered, mut won) = (0, 0, 0);
-            for epoch in 1..=epochs {
-                let children = island.breed(nudges, &breeding, dims, None);
-                let outcomes = evaluate(&scene, &children, dims, threads);
-                let combined: Vec<u64> = (children.iter().enumerate())
-                    .filter(|(_, c)| c.combined)
-                    .map(|(k, _)| task + 1 + k as u64)
-                    .collect();
-                let outcomes = (outcomes.into_iter())
-                    .map(|o| {
-                        task += 1;
-                        (TaskId(task), o)
+            let mut raced = 0;
+            let mut leader = climb(0);
+            if racers > 1 {
+                let mut field: Vec<Climb> = (0..racers as u64).map(climb).collect();
+                for racer in &mut field {
+                    for _ in 0..race_epochs {
+                        racer.epoch(&breeding, &scene, dims, nudges, threads, combining);
+                    }
+                    raced += racer.task;
+                }
+                leader = (field.into_iter())
+                    .reduce(|a, b| {
+                        let (x, y) = (&a.island.best().outcome, &b.island.best().outcome);
+                        if y.is_fitter_than(x) { b } else { a }
                     })
-                    .collect();
-                island.apply(children, outcomes, combining);
-                offered += combined.len();
-                won += usize::from(combined.contains(&island.best().task.0));
+                    .expect("racers");
+                raced -= leader.task;
+            }
+            let first = if racers > 1 { race_epochs + 1 } else { 1 };
+            for epoch in first..=epochs {
+                leader.epoch(&breeding, &scene, dims, nudges, threads, combining);
                 if epoch % 10 == 0 {
-                    line += &format!(" {:.4}", figure(&island.best().outcome));
+                    line += &format!(" {:.4}", figure(&leader.island.best().outcome));
                 }
             }
+            if epochs % 10 != 0 {
+                line += &format!(" {:.4}", figure(&leader.island.best().outcome));
+            }
             println!(
-                "{line} ({task} evaluations; {offered} combined designs offered, one held the best after {won} epochs)"
+                "{line} ({} evaluations; {} combined designs offered, one held the best after {} epochs)",
+                leader.task + raced,
+                leader.offered,
+                leader.won
             );
         }
+    }
+}
+
+/// One climb: an island holding only the climb's best, and what it has spent.
+struct Climb {
+    island: Island,
+    task: u64,
+    offered: usize,
+    won: usize,
+}
+
+impl Climb {
+    /// One epoch of `nudges` children, evaluated and applied.
+    fn epoch(
+        &mut self,
+        breeding: &Breeding,
+        scene: &amorph::task::Scene,
+        dims: GridDims,
+        nudges: usize,
+        threads: usize,
+        combining: Option<amorph_coordinator::search::Combining>,
+    ) {
+        let children = self.island.breed(nudges, breeding, dims, None);
+        let outcomes = evaluate(scene, &children, dims, threads);
+        let combined: Vec<u64> = (children.iter().enumerate())
+            .filter(|(_, c)| c.combined)
+            .map(|(k, _)| self.task + 1 + k as u64)
+            .collect();
+        let outcomes = (outcomes.into_iter())
+            .map(|o| {
+                self.task += 1;
+                (TaskId(self.task), o)
+            })
+            .collect();
+        self.island.apply(children, outcomes, combining);
+        self.offered += combined.len();
+        self.won += usize::from(combined.contains(&self.island.best().task.0));
     }
 }
 

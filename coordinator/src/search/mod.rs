@@ -14,6 +14,7 @@ mod stall;
 mod unchanged;
 mod variation;
 
+pub use combination::Combining;
 pub use diversity::{
     DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
 };
