@@ -99,11 +99,11 @@ fn main() {
             let first = if racers > 1 { race_epochs + 1 } else { 1 };
             for epoch in first..=epochs {
                 leader.epoch(&breeding, &scene, dims, nudges, threads, combining);
-                if epoch % 10 == 0 {
+                if epoch.is_multiple_of(10) {
                     line += &format!(" {:.4}", figure(&leader.island.best().outcome));
                 }
             }
-            if epochs % 10 != 0 {
+            if !epochs.is_multiple_of(10) {
                 line += &format!(" {:.4}", figure(&leader.island.best().outcome));
             }
             println!(
