@@ -34,11 +34,11 @@ pub struct Combining {
 /// itself): a moved point takes its value from the fittest nudge that moved it (`improving` is
 /// fittest first), and a point a nudge appended (an insertion) is appended, up to `max_points`. A
 /// nudge that is not the base with points moved or appended (it has fewer points) is left out.
-/// The changes are read against `base`, so on another design `onto` keeps every point where it differs from `base` (its own accepted change wins)
-/// and every point it already appended. `None` when `onto` has fewer points than `base` (it is not
-/// a descendant, so the changes have no place), when nothing changes `onto`, or when `onto` is
-/// `base` and fewer than two nudges contribute (a single nudge's change is that nudge, already
-/// evaluated).
+/// The changes are read against `base`, so on another design `onto` keeps every point where it
+/// differs from `base` (its own accepted change wins) and every point it already appended. `None`
+/// when `onto` has fewer points than `base` (it is not a descendant, so the changes have no
+/// place), when nothing changes `onto`, or when `onto` is `base` and fewer than two nudges
+/// contribute (a single nudge's change is that nudge, already evaluated).
 pub fn combine_onto(
     base: &Genome,
     onto: &Genome,

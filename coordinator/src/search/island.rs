@@ -260,7 +260,9 @@ impl Island {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
         let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
         let wins = self.winners(&children, &refs);
-        let improving = combine.and_then(|c| Some((c, self.improving_nudges(&children, &refs)?)));
+        self.combinations = combine.map_or_else(Vec::new, |combining| {
+            self.combine_improving_nudges(&children, &refs, &wins, &combining)
+        });
         let mut replaced = 0;
         for ((child, (task, outcome)), wins) in children.into_iter().zip(outcomes).zip(wins) {
             if child.combined {
@@ -279,25 +281,20 @@ impl Island {
                 replaced += 1;
             }
         }
-        self.combinations = improving.map_or_else(Vec::new, |(combining, (slot, base, genomes))| {
-            let refs: Vec<&Genome> = genomes.iter().collect();
-            let offered = combinations(&base, &self.population[slot].genome, &refs, &combining);
-            if !offered.is_empty() {
-                info!(island = %self.id, improving = refs.len(), offered = offered.len(), "improving nudges combined");
-            }
-            offered
-        });
         replaced
     }
 
     /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
     /// their dominant parent's slot, before any child of the epoch is applied), fittest first
-    /// (child order on a tie): their slot, that design, and their genomes. `None` without one.
-    fn improving_nudges(
+    /// (child order on a tie), added up by [`combinations`]. The slot's occupant after the epoch,
+    /// what `rebase` builds on, is the last child `wins` gives it, or the one it had.
+    fn combine_improving_nudges(
         &self,
         children: &[Child],
         outcomes: &[&Outcome],
-    ) -> Option<(usize, Genome, Vec<Genome>)> {
+        wins: &[bool],
+        combining: &Combining,
+    ) -> Vec<Genome> {
         let mut improving: Vec<(usize, &Child)> = children
             .iter()
             .enumerate()
@@ -308,12 +305,22 @@ impl Island {
             })
             .collect();
         // Nudges of one epoch share one base (the island's best, or the run's under `shared`).
-        let slot = improving.first()?.1.dominant_parent;
+        let Some(slot) = improving.first().map(|(_, c)| c.dominant_parent) else {
+            return Vec::new();
+        };
         improving.retain(|(_, c)| c.dominant_parent == slot);
+        let base = &self.population[slot].genome;
+        let onto = (children.iter().zip(wins))
+            .rfind(|(c, won)| **won && c.dominant_parent == slot)
+            .map_or(base, |(c, _)| &c.genome);
         // A stable sort, so ties keep child order.
         improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
-        let genomes = improving.iter().map(|(_, c)| c.genome.clone()).collect();
-        Some((slot, self.population[slot].genome.clone(), genomes))
+        let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
+        let offered = combinations(base, onto, &genomes, combining);
+        if !offered.is_empty() {
+            info!(island = %self.id, improving = genomes.len(), offered = offered.len(), "improving nudges combined");
+        }
+        offered
     }
 
     /// Counts crossover children of this epoch that were not evaluated because they make their
