@@ -56,10 +56,7 @@ fn main() {
             probability: v[1],
             step: v[2],
             insertion: v.get(3).copied().unwrap_or(0.0),
-            shared: false,
-            combine: false,
-            combinations: 1,
-            rebase: false,
+            ..Default::default()
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let (mut best, mut best_outcome) = (genome.clone(), start.clone());

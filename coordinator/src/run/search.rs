@@ -161,6 +161,7 @@ impl Search {
             parent_designs: raw.search.skip_unchanged.then(ParentDesigns::default),
             unchanged_children: 0,
         };
+        search.breed_for_level(config);
         let dims = raw.resolution.dims(0);
         let outcomes = evaluate_settled(
             &mut search,
@@ -241,6 +242,14 @@ impl Search {
             .zip(outcomes)
             .map(|((island, children), outcomes)| island.apply(children, outcomes, combine))
             .collect())
+    }
+
+    /// Sets the local search to act as configured at the current level
+    /// (`local_search.finest_fraction` at the finest).
+    pub(super) fn breed_for_level(&mut self, config: &RunConfig) {
+        let finest = self.resolution.is_final(&config.raw.resolution);
+        self.breeding.variation.local_search =
+            (config.raw.search.local_search).at_level(finest);
     }
 
     /// The children of the next epoch at `dims`, with `spent` evaluations of the budget spent

@@ -21,6 +21,10 @@ use super::insertion::BoundarySite;
 pub struct LocalSearchParams {
     /// Share of each epoch's children that are nudges of the best (0: off, the paper's search).
     pub fraction: f64,
+    /// The share at the finest resolution level, where it differs (unset: `fraction`). Under a
+    /// shared climb the crossover children there never beat the run's best in the arc's runs
+    /// (docs/evolution.md, session 38), so their evaluations can go to the climb instead.
+    pub finest_fraction: Option<f64>,
     /// How many of the best's points a nudge moves, every continuous parameter of each; 0 moves
     /// each parameter of every point with `probability` instead. One point changes one region of
     /// the design, which near a good design improves it far more often (docs/evolution.md).
@@ -54,6 +58,7 @@ impl Default for LocalSearchParams {
     fn default() -> Self {
         Self {
             fraction: 0.0,
+            finest_fraction: None,
             points: 1,
             probability: 0.2,
             step: 0.02,
@@ -74,6 +79,18 @@ impl LocalSearchParams {
             combinations: self.combinations,
             rebase: self.rebase,
         })
+    }
+
+    /// These keys as they act at a level: at the finest, `finest_fraction` replaces `fraction`.
+    pub fn at_level(&self, finest: bool) -> Self {
+        let fraction = match self.finest_fraction {
+            Some(f) if finest => f,
+            _ => self.fraction,
+        };
+        Self {
+            fraction,
+            ..self.clone()
+        }
     }
 
     /// How many of `count` children are nudges of the best (the rest are bred as in the paper).
@@ -202,6 +219,9 @@ impl Variation {
         if !unit(l.fraction) {
             return Err("search.local_search.fraction must be in [0, 1]".into());
         }
+        if l.finest_fraction.is_some_and(|f| !unit(f)) {
+            return Err("search.local_search.finest_fraction must be in [0, 1]".into());
+        }
         if !unit(l.probability) {
             return Err("search.local_search.probability must be in [0, 1]".into());
         }
@@ -293,6 +313,26 @@ mod tests {
         assert_eq!(l.nudges(50), 10);
         assert_eq!(l.nudges(3), 1);
         assert_eq!(LocalSearchParams::default().nudges(50), 0);
+    }
+
+    #[test]
+    fn the_finest_fraction_acts_only_at_the_finest_level() {
+        let l = LocalSearchParams {
+            fraction: 0.5,
+            finest_fraction: Some(1.0),
+            ..Default::default()
+        };
+        assert_eq!(l.at_level(false).nudges(48), 24);
+        assert_eq!(l.at_level(true).nudges(48), 48);
+        let unset = LocalSearchParams {
+            fraction: 0.5,
+            ..Default::default()
+        };
+        assert_eq!(unset.at_level(true), unset, "unset, the finest level breeds as the others");
+        let mut v = Variation::default();
+        v.local_search.finest_fraction = Some(1.5);
+        let err = v.validate().unwrap_err();
+        assert!(err.contains("search.local_search.finest_fraction"), "{err}");
     }
 
     #[test]

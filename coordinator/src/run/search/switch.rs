@@ -61,6 +61,7 @@ impl Search {
         if !switch {
             return Ok(());
         }
+        self.breed_for_level(config);
         if let Some(overlap) = self.overlap.take() {
             self.drop_overlap(overlap);
         }

@@ -93,10 +93,7 @@ fn nudges_are_the_best_with_only_continuous_parameters_moved() {
             probability: 1.0,
             step: 0.01,
             insertion: 0.0,
-            shared: false,
-            combine: false,
-            combinations: 1,
-            rebase: false,
+            ..Default::default()
         },
         ..Default::default()
     });
