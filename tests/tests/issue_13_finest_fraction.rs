@@ -90,9 +90,8 @@ fn finest_children_are_steps(db: &Connection, switch: i64) -> Vec<bool> {
 
 #[test]
 fn a_finest_fraction_of_one_breeds_only_nudges_there_and_leaves_the_coarse_level_alone() {
-    let (keyed, keyed_config) = thread_count_blind("finest-fraction", |dir| {
-        config(dir, Some(1.0), 220)
-    });
+    let (keyed, keyed_config) =
+        thread_count_blind("finest-fraction", |dir| config(dir, Some(1.0), 220));
     assert_eq!(keyed.evaluations, 220);
     let plain_config = config(&scratch_dir("finest-fraction-plain"), None, 220);
     run_locally(&plain_config, 2);
@@ -119,7 +118,11 @@ fn a_finest_fraction_of_one_breeds_only_nudges_there_and_leaves_the_coarse_level
     // run breeds half its children by crossover, and most of those are not.
     let keyed_steps = finest_children_are_steps(&keyed_db, switch);
     let plain_steps = finest_children_are_steps(&plain_db, switch);
-    assert!(keyed_steps.len() >= 60, "{} finest children", keyed_steps.len());
+    assert!(
+        keyed_steps.len() >= 60,
+        "{} finest children",
+        keyed_steps.len()
+    );
     assert!(keyed_steps.iter().all(|&s| s), "{keyed_steps:?}");
     let crossed = plain_steps.iter().filter(|&&s| !s).count();
     assert!(crossed * 4 >= plain_steps.len(), "{plain_steps:?}");

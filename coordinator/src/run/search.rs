@@ -248,8 +248,7 @@ impl Search {
     /// (`local_search.finest_fraction` at the finest).
     pub(super) fn breed_for_level(&mut self, config: &RunConfig) {
         let finest = self.resolution.is_final(&config.raw.resolution);
-        self.breeding.variation.local_search =
-            (config.raw.search.local_search).at_level(finest);
+        self.breeding.variation.local_search = (config.raw.search.local_search).at_level(finest);
     }
 
     /// The children of the next epoch at `dims`, with `spent` evaluations of the budget spent

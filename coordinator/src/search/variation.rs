@@ -328,7 +328,11 @@ mod tests {
             fraction: 0.5,
             ..Default::default()
         };
-        assert_eq!(unset.at_level(true), unset, "unset, the finest level breeds as the others");
+        assert_eq!(
+            unset.at_level(true),
+            unset,
+            "unset, the finest level breeds as the others"
+        );
         let mut v = Variation::default();
         v.local_search.finest_fraction = Some(1.5);
         let err = v.validate().unwrap_err();
