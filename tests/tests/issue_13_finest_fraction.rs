@@ -39,8 +39,11 @@ latest_switch = [100]
     circular_arc("finest-fraction", 5, results_dir, &sections)
 }
 
-/// `(epoch, purpose, genome, outcome)` of every evaluation, in task order.
-fn evaluations(db: &Connection) -> Vec<(i64, String, String, String)> {
+/// `(epoch, purpose, genome, outcome)` of an evaluation.
+type Row = (i64, String, String, String);
+
+/// Every evaluation, in task order.
+fn evaluations(db: &Connection) -> Vec<Row> {
     let mut stmt = db
         .prepare("SELECT epoch, purpose, genome, outcome FROM evaluation ORDER BY task_id")
         .unwrap();
@@ -77,12 +80,13 @@ fn is_a_step_from(best: &Genome, child: &Genome) -> bool {
         && b.iter().zip(c).filter(|(p, q)| p != q).count() <= 1
 }
 
-/// Children of the finest level as (is a step from the run's best before their epoch) flags.
-fn finest_children_are_steps(db: &Connection, switch: i64) -> Vec<bool> {
-    (evaluations(db).into_iter())
+/// Children of the finest level after its first epoch (`rows` are `db`'s evaluations) as (is a
+/// step from the run's best before their epoch) flags.
+fn finest_children_are_steps(db: &Connection, rows: &[Row], switch: i64) -> Vec<bool> {
+    (rows.iter())
         .filter(|(epoch, purpose, _, _)| purpose == "child" && *epoch > switch + 1)
         .map(|(epoch, _, genome, _)| {
-            let child: Genome = serde_json::from_str(&genome).unwrap();
+            let child: Genome = serde_json::from_str(genome).unwrap();
             is_a_step_from(&run_best(db, epoch - 1), &child)
         })
         .collect()
@@ -98,26 +102,23 @@ fn a_finest_fraction_of_one_breeds_only_nudges_there_and_leaves_the_coarse_level
     let open = |c: &RunConfig| Connection::open(c.run_dir().join("run.sqlite")).unwrap();
     let (keyed_db, plain_db) = (open(&keyed_config), open(&plain_config));
 
-    // The coarse level, and the re-evaluation that ends it, are the plain run's to the bit.
+    // The coarse level, and the re-evaluation that ends it (stored with the last coarse epoch's
+    // number; the finest level's children start at the next), are the plain run's to the bit.
     let (keyed_rows, plain_rows) = (evaluations(&keyed_db), evaluations(&plain_db));
     let switch = keyed_rows
         .iter()
         .find(|r| r.1 == "reevaluation")
         .expect("the run switched")
         .0;
-    let upto = |rows: &[(i64, String, String, String)]| {
-        rows.iter()
-            .filter(|r| r.0 < switch || r.1 == "reevaluation")
-            .cloned()
-            .collect::<Vec<_>>()
-    };
+    let upto =
+        |rows: &[Row]| -> Vec<Row> { rows.iter().filter(|r| r.0 <= switch).cloned().collect() };
     assert_eq!(upto(&keyed_rows), upto(&plain_rows));
     assert!(keyed_rows != plain_rows, "the key changed nothing");
 
     // At the finest level every child of the keyed run is one step from the run's best; the plain
     // run breeds half its children by crossover, and most of those are not.
-    let keyed_steps = finest_children_are_steps(&keyed_db, switch);
-    let plain_steps = finest_children_are_steps(&plain_db, switch);
+    let keyed_steps = finest_children_are_steps(&keyed_db, &keyed_rows, switch);
+    let plain_steps = finest_children_are_steps(&plain_db, &plain_rows, switch);
     assert!(
         keyed_steps.len() >= 60,
         "{} finest children",
