@@ -11,6 +11,7 @@ mod migration;
 mod resolution;
 mod split;
 mod stall;
+mod step_kind;
 mod unchanged;
 mod variation;
 
@@ -26,5 +27,6 @@ pub use migration::{
 };
 pub use resolution::{ResolutionSchedule, ResolutionState, merge_order};
 pub use split::{SplitWatch, split_island};
+pub use step_kind::{StepKind, step_kind};
 pub use unchanged::{ParentDesigns, first_in_turn, keep_at_least_one};
 pub use variation::{CrossoverParams, LocalSearchParams, StepAdaptation, StepRule, Variation};
