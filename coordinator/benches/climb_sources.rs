@@ -8,7 +8,9 @@
 //! children of each kind, how many beat that best, and in how many epochs the new best was one.
 //! A combination is built on the design the previous epoch's nudges came from, so a child that
 //! is other against the current best is read again against the previous epoch's best. Also the
-//! best's figure and point count at the level's first and last epoch. With `--epochs`, one line
+//! best's figure and point count at the level's first and last epoch, and at a switch whether the
+//! new level starts from the last best of the level before (the climb's) or from another design
+//! of the re-evaluated populations, with that best's own figure at the new level. With `--epochs`, one line
 //! per epoch: the best's figure and points, the improving children by kind, the new best's kind.
 //! The store is only read; the same store gives the same lines.
 
@@ -151,6 +153,13 @@ impl Run {
             .reduce(|a, b| if b.1.is_fitter_than(a.1) { b } else { a })
     }
 
+    /// An evaluation of exactly `genome` at `resolution` (a check or a re-evaluation), if any.
+    fn outcome_at(&self, genome: &Genome, resolution: &str) -> Option<&Outcome> {
+        (self.rows.values())
+            .find(|r| r.resolution == resolution && r.genome == *genome)
+            .map(|r| &r.outcome)
+    }
+
     fn report(&self, path: &str, per_epoch: bool) {
         let figure = |o: &Outcome| self.scene.figure(o).unwrap_or(f64::NAN);
         // Children by level, in the order the levels came.
@@ -163,7 +172,11 @@ impl Run {
             level.entry(row.epoch).or_default().push(id);
         }
         println!("{path}");
+        // The last best of the level before, to say whether the switch handed it on.
+        let mut handed: Option<&Genome> = None;
         for (resolution, epochs) in &levels {
+            let previous_best = handed;
+            let mut start: Option<&Genome> = None;
             let mut tally: BTreeMap<StepKind, [usize; 3]> = BTreeMap::new();
             let (mut first, mut last) = (None, None);
             for (&epoch, children) in epochs {
@@ -198,9 +211,11 @@ impl Run {
                     tally.entry(kind).or_default()[2] += 1;
                 }
                 first.get_or_insert((epoch, figure(base_outcome), base.points.len()));
+                start.get_or_insert(base);
                 let after = self.best_after(epoch, resolution);
                 if let Some((genome, outcome)) = after {
                     last = Some((epoch, figure(outcome), genome.points.len()));
+                    handed = Some(genome);
                 }
                 if per_epoch {
                     let kinds: Vec<String> = (improving.iter())
@@ -219,6 +234,23 @@ impl Run {
             let (Some(first), Some(last)) = (first, last) else {
                 continue;
             };
+            if let (Some(previous), Some(start)) = (previous_best, start) {
+                let here = self
+                    .outcome_at(previous, resolution)
+                    .map_or("not evaluated here".to_string(), |o| {
+                        format!("{:.4} here", figure(o))
+                    });
+                let kind = step_kind(previous, start);
+                println!(
+                    "  switch: the level before ended on a best of {} points ({here}); this level starts from {}",
+                    previous.points.len(),
+                    if kind == StepKind::Copy {
+                        "that design".to_string()
+                    } else {
+                        format!("another design ({} against it)", kind.name())
+                    },
+                );
+            }
             println!(
                 "  {resolution}: epochs {}-{}, best {:.4} -> {:.4}, best's points {} -> {} ({:+.2} an epoch)",
                 first.0,
