@@ -141,7 +141,17 @@ impl Run {
                 )
             })
             .collect();
-        (self.populations.get(&epoch)?.iter())
+        // The initial population is not stored as a population: its evaluations are.
+        let initial: Vec<u64> = (self.rows.iter())
+            .filter(|(_, r)| r.epoch == epoch && r.purpose == "initial")
+            .map(|(&t, _)| t)
+            .collect();
+        let members = match self.populations.get(&epoch) {
+            Some(members) => members.as_slice(),
+            None if !initial.is_empty() => initial.as_slice(),
+            None => return None,
+        };
+        (members.iter())
             .filter_map(|t| {
                 let row = &self.rows[t];
                 if row.resolution == resolution {
