@@ -59,6 +59,8 @@ struct Run {
     rows: BTreeMap<u64, Row>,
     /// Task ids of every island's members after each epoch (islands flattened).
     populations: BTreeMap<usize, Vec<u64>>,
+    /// Task ids of the evaluations stored under each epoch.
+    by_epoch: BTreeMap<usize, Vec<u64>>,
 }
 
 impl Run {
@@ -121,10 +123,15 @@ impl Run {
             }
             populations.entry(epoch).or_default().push(task);
         }
+        let mut by_epoch: BTreeMap<usize, Vec<u64>> = BTreeMap::new();
+        for (&id, row) in &rows {
+            by_epoch.entry(row.epoch).or_default().push(id);
+        }
         Ok(Self {
             scene,
             rows,
             populations,
+            by_epoch,
         })
     }
 
@@ -132,19 +139,10 @@ impl Run {
     /// resolution (the last coarse population, before the switch) is judged by its evaluation at
     /// this one, the switch's re-evaluation of the same genome.
     fn best_after(&self, epoch: usize, resolution: &str) -> Option<(&Genome, &Outcome)> {
-        let at_resolution: HashMap<String, &Outcome> = (self.rows.values())
-            .filter(|r| r.resolution == resolution && r.epoch == epoch)
-            .map(|r| {
-                (
-                    serde_json::to_string(&r.genome).expect("a genome"),
-                    &r.outcome,
-                )
-            })
-            .collect();
+        let stored = self.by_epoch.get(&epoch).map_or(&[][..], Vec::as_slice);
         // The initial population is not stored as a population: its evaluations are.
-        let initial: Vec<u64> = (self.rows.iter())
-            .filter(|(_, r)| r.epoch == epoch && r.purpose == "initial")
-            .map(|(&t, _)| t)
+        let initial: Vec<u64> = (stored.iter().copied())
+            .filter(|t| self.rows[t].purpose == "initial")
             .collect();
         let members = match self.populations.get(&epoch) {
             Some(members) => members.as_slice(),
@@ -157,8 +155,9 @@ impl Run {
                 if row.resolution == resolution {
                     return Some((&row.genome, &row.outcome));
                 }
-                let key = serde_json::to_string(&row.genome).expect("a genome");
-                at_resolution.get(&key).map(|o| (&row.genome, *o))
+                (stored.iter().map(|t| &self.rows[t]))
+                    .find(|r| r.resolution == resolution && r.genome == row.genome)
+                    .map(|r| (&row.genome, &r.outcome))
             })
             .reduce(|a, b| if b.1.is_fitter_than(a.1) { b } else { a })
     }
@@ -189,13 +188,19 @@ impl Run {
             let mut start: Option<&Genome> = None;
             let mut tally: BTreeMap<StepKind, [usize; 3]> = BTreeMap::new();
             let (mut first, mut last) = (None, None);
+            // Each epoch's best is read up to three times (as the best after it, and as the
+            // base of the next two epochs): found once.
+            let mut bests = HashMap::new();
+            let mut best_after = |e: usize| {
+                *bests
+                    .entry(e)
+                    .or_insert_with(|| self.best_after(e, resolution))
+            };
             for (&epoch, children) in epochs {
-                let Some((base, base_outcome)) = self.best_after(epoch - 1, resolution) else {
+                let Some((base, base_outcome)) = best_after(epoch - 1) else {
                     continue;
                 };
-                let previous = (epoch >= 2)
-                    .then(|| self.best_after(epoch - 2, resolution))
-                    .flatten();
+                let previous = (epoch >= 2).then(|| best_after(epoch - 2)).flatten();
                 let mut improving: BTreeMap<StepKind, usize> = BTreeMap::new();
                 let mut fittest: Option<(StepKind, &Outcome)> = None;
                 for id in children {
@@ -222,8 +227,7 @@ impl Run {
                 }
                 first.get_or_insert((epoch, figure(base_outcome), base.points.len()));
                 start.get_or_insert(base);
-                let after = self.best_after(epoch, resolution);
-                if let Some((genome, outcome)) = after {
+                if let Some((genome, outcome)) = best_after(epoch) {
                     last = Some((epoch, figure(outcome), genome.points.len()));
                     handed = Some(genome);
                 }
