@@ -45,14 +45,6 @@ impl StepKind {
             StepKind::Other => "other",
         }
     }
-
-    /// Whether a nudge of `base` (one step of the local search, or their combination) made `child`.
-    pub fn is_climb(self) -> bool {
-        matches!(
-            self,
-            StepKind::Move | StepKind::Insertion | StepKind::Combined
-        )
-    }
 }
 
 /// The kind of step that takes `base` to `child`, by position: point `i` of the child is point
