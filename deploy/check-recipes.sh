@@ -66,8 +66,10 @@ if [ "$got" != "$want" ]; then
   exit 1
 fi
 # study.sh summary (the docs' island curves rely on it): two settings of two runs each, one run
-# stopped short of the paper's value, which counts as later than any run that reached it.
-fake_run() { # <name> <seed> <evaluations at which the paper's 0.10 % was reached, or "never">
+# stopped short of the paper's value, which counts as later than any run that reached it; two
+# runs a signal stopped, one after it reached the value (counted) and one before (left out, as
+# its count is not known yet), and one with no summary (still going, or killed: left out).
+fake_run() { # <name> <seed> <evaluations at which the paper's 0.10 % was reached, or "never"> [<stop>]
   local dir="$study/sum/$1-s$2"
   mkdir -p "$dir"
   printf 'seed = %s\n[scene]\ntarget = "straight"\n[resolution]\nlevels = [[12, 40, 12]]\n' "$2" > "$dir/config.toml"
@@ -75,13 +77,15 @@ fake_run() { # <name> <seed> <evaluations at which the paper's 0.10 % was reache
   printf '1,100,1.0,12x40x12,0,-1,0.5\n' >> "$dir/history.csv"
   if [ "$3" = never ]; then stop=budget; else stop=target_reached
     printf '2,%s,2.0,12x40x12,0,-1,0.09\n' "$3" >> "$dir/history.csv"; fi
-  printf '{"stop": "%s"}' "$stop" > "$dir/summary.json"
+  stop=${4:-$stop}
+  [ "$stop" = none ] || printf '{"stop": "%s"}' "$stop" > "$dir/summary.json"
 }
-fake_run stra-1x48 1 1000; fake_run stra-1x48 2 3000
+fake_run stra-1x48 1 1000; fake_run stra-1x48 2 3000; fake_run stra-1x48 3 4000 shutdown
 fake_run stra-16x3 1 2000; fake_run stra-16x3 2 never
+fake_run stra-16x3 3 never shutdown; fake_run stra-16x3 4 never none
 got=$(deploy/study.sh summary "$study/sum" | tail -n 2)
-want='| straight | stra-1x48 | 2 | 2 | 2,000 | 1,000–3,000 | – |
-| straight | stra-16x3 | 2 | 1 | beyond | 2,000–beyond | 0.25 |'
+want='| straight | stra-1x48 | 3 | 3 | 3,000 | 1,000–4,000 | – |
+| straight | stra-16x3 | 2 | 1 | beyond | 2,000–beyond | 0.33 |'
 if [ "$got" != "$want" ]; then
   printf 'check-recipes: study.sh summary printed\n%s\nexpected\n%s\n' "$got" "$want" >&2
   exit 1

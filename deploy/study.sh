@@ -20,10 +20,12 @@
 # uninterrupted, or starts it again if it stopped before writing one. `table` prints one markdown row per run from its
 # config.toml, summary.json and history.csv: the best RMS error at the final resolution, and the
 # evaluations at which the run first reached the paper's simulated error (Table III) and half of it,
-# and the count at the final level's first epoch (how many of them the coarser levels took).
-# `summary` prints one row per setting (runs named <setting>-s<seed>) and target over the finished
-# runs: how many reached the paper's value, the median and quartiles of the evaluations to it (a run
-# that stopped short counts as beyond any budget), and the probability that a run of the setting
+# and the count at the final level's first epoch (how many of them the coarser levels took); a run
+# with no summary.json shows as unfinished (still going, or killed), one a signal stopped as shutdown.
+# `summary` prints one row per setting (runs named <setting>-s<seed>) and target over the runs
+# whose count is known (ended, or already past the paper's value): how many reached the paper's
+# value, the median and quartiles of the evaluations to it (a run that ended short counts as
+# beyond any budget), and the probability that a run of the setting
 # gets there before a run of the setting with the fewest islands (the number before "x" in its name).
 # That is a quick look while a study runs: for figures, put the runs in docs/data/island_curve.csv
 # and run the island_curve bench, which counts a stopped run as censored at its count (Kaplan-Meier,
@@ -204,7 +206,7 @@ def read(run):
             first[name] = hit
     return {
         "name": run.name, "label": re.sub(r"-s\d+$", "", run.name), "target": target,
-        "seed": config["seed"], "evaluations": evals, "stop": summary.get("stop", "running"),
+        "seed": config["seed"], "evaluations": evals, "stop": summary.get("stop", "unfinished"),
         "start": points[0][0] if points else None, "best": min((v for _, v in points), default=None),
         "paper": paper, "first": first, "wall": summary.get("wall_seconds", wall),
     }
@@ -222,9 +224,10 @@ if mode == "table":
               f"{fmt(r['best'])} | {fmt(r['paper'])} | {r['first'].get('paper', '–')} | {r['first'].get('half', '–')} | {r['wall']:.0f} |")
     sys.exit()
 
-# summary: one row per setting (a run's name less its "-s<seed>"), over its finished runs. A run
-# that stopped short of the paper's value counts as infinitely late, so the median is the seeds'
-# median whatever the budget; a run still going is left out.
+# summary: one row per setting (a run's name less its "-s<seed>"), over the runs whose count is
+# known. A run that ended for good (budget, wall time) short of the paper's value counts as
+# infinitely late, so the median is the seeds' median whatever the budget. A run still going, or
+# one a signal stopped (it resumes from its store), is left out unless it already reached the value.
 def median(xs):
     xs, n = sorted(xs), len(xs)
     return xs[n // 2] if n % 2 else (xs[n // 2 - 1] + xs[n // 2]) / 2
@@ -237,7 +240,7 @@ def faster(a, b):
 
 groups = {}
 for r in runs:
-    if r["stop"] != "running":
+    if "paper" in r["first"] or r["stop"] not in ("unfinished", "shutdown"):
         groups.setdefault(r["target"], {}).setdefault(r["label"], []).append(r["first"].get("paper", math.inf))
 show = lambda v: "beyond" if v == math.inf else f"{v:,.0f}"
 print("| target | setting | runs | reached the paper's value | median evaluations to it | quartiles | P(faster than the first setting) |")
