@@ -34,6 +34,10 @@
 # the paired_runs bench (docs/data/carry_checked.csv, docs/evolution.md session 35).
 # COORDINATOR overrides the binary (default target/release/coordinator).
 set -euo pipefail
+# Bash reads a script as it runs it, and a study runs for hours: the whole script is one block
+# (closed by `exit` below) so that bash has read all of it before it starts, and editing or
+# checking out this file mid-study cannot make a running study re-run or skip a seed.
+{
 
 usage() {
     sed -n '4,9p' "$0" | sed 's/^# *//' >&2
@@ -277,3 +281,5 @@ table | summary)
     ;;
 *) usage ;;
 esac
+exit
+}
