@@ -298,18 +298,21 @@ impl Search {
         // the children left after the skip (`drop_unchanged`): what an epoch breeds then never
         // depends on the budget, so a replay needs only the count the store recorded.
         let skipping = self.parent_designs.is_some();
-        let mut children: Vec<Vec<Child>> = self
-            .islands
-            .iter_mut()
-            .enumerate()
-            .map(|(i, island)| {
+        let counts: Vec<usize> = (0..islands)
+            .map(|i| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
-                let count = if skipping {
+                if skipping {
                     self.children_per_island
                 } else {
                     (self.children_per_island as u64).min(share) as usize
-                };
-                island.breed(count, breeding, dims, shared.as_ref().map(|(_, s)| s))
+                }
+            })
+            .collect();
+        let nudges = local.nudges_per_island(&counts);
+        let mut children: Vec<Vec<Child>> = (self.islands.iter_mut().enumerate())
+            .map(|(i, island)| {
+                let best = shared.as_ref().map(|(_, s)| s);
+                island.breed_nudging(counts[i], nudges[i], breeding, dims, best)
             })
             .collect();
         if let Some((holder, _)) = shared {

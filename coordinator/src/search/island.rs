@@ -127,6 +127,21 @@ impl Island {
         dims: GridDims,
         shared: Option<&SharedBest>,
     ) -> Vec<Child> {
+        let nudges = breeding.variation.local_search.nudges(count);
+        self.breed_nudging(count, nudges, breeding, dims, shared)
+    }
+
+    /// `breed` with the number of nudges among the `count` children given (at most `count`): a
+    /// shared climb's share can be counted over the whole epoch (`local_search.per_epoch`).
+    pub fn breed_nudging(
+        &mut self,
+        count: usize,
+        nudges: usize,
+        breeding: &Breeding,
+        dims: GridDims,
+        shared: Option<&SharedBest>,
+    ) -> Vec<Child> {
+        let nudges = nudges.min(count);
         let (replaced, tried) = self.last_success;
         self.step_scale =
             breeding
@@ -138,7 +153,6 @@ impl Island {
             step: breeding.mutation.step * self.step_scale,
             ..breeding.mutation.clone()
         };
-        let nudges = breeding.variation.local_search.nudges(count);
         let mut children: Vec<Child> = (0..count - nudges)
             .map(|_| self.crossover_child(breeding, &mutation))
             .collect();

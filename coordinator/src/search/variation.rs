@@ -41,6 +41,12 @@ pub struct LocalSearchParams {
     /// them) instead of the island's own best: one climb fed by all islands rather than one short
     /// climb per island. Crossover children stay in their islands.
     pub shared: bool,
+    /// With `shared`: `fraction` is the share of the whole epoch's children, spread over the
+    /// islands as the budget is (the first islands take the remainder), instead of each island's
+    /// share rounded on its own. Three children at 0.5 round to two nudges, so sixteen islands of
+    /// 3 gave the climb 32 of 48 children where one island of 48 gives it 24; with this the
+    /// climb's share is the configured one whatever the island count.
+    pub per_epoch: bool,
     /// The nudges of an epoch that beat the design they were nudged from are applied together
     /// (each moved point from the fittest nudge that moved it, inserted points appended) and
     /// offered as the first nudge of the next epoch (`search::combination`): the climb can then
@@ -64,6 +70,7 @@ impl Default for LocalSearchParams {
             step: 0.02,
             insertion: 0.0,
             shared: false,
+            per_epoch: false,
             combine: false,
             combinations: 1,
             rebase: false,
@@ -96,6 +103,31 @@ impl LocalSearchParams {
     /// How many of `count` children are nudges of the best (the rest are bred as in the paper).
     pub fn nudges(&self, count: usize) -> usize {
         ((self.fraction * count as f64).round() as usize).min(count)
+    }
+
+    /// How many of each island's `counts` children are nudges: each island's own share, or with
+    /// `per_epoch` the epoch's share spread as evenly as the counts allow, lower indices first.
+    pub fn nudges_per_island(&self, counts: &[usize]) -> Vec<usize> {
+        if !self.per_epoch {
+            return counts.iter().map(|&c| self.nudges(c)).collect();
+        }
+        let mut left = self.nudges(counts.iter().sum());
+        let mut nudges = vec![0; counts.len()];
+        // Round-robin one nudge at a time: an island whose count the budget cut short takes
+        // fewer, and the others take its share, so the epoch's total is kept.
+        while left > 0 {
+            let before = left;
+            for (n, &c) in nudges.iter_mut().zip(counts) {
+                if left > 0 && *n < c {
+                    *n += 1;
+                    left -= 1;
+                }
+            }
+            if left == before {
+                break;
+            }
+        }
+        nudges
     }
 
     /// Moves `genome`, a copy of the island's best, as configured: with probability `insertion`
@@ -236,6 +268,11 @@ impl Variation {
                 "search.local_search.combinations must be between 1 and {MAX_COMBINATIONS}"
             ));
         }
+        if l.per_epoch && !l.shared {
+            return Err(
+                "search.local_search.per_epoch needs shared = true (one climb for the run)".into(),
+            );
+        }
         if !l.combine && (l.combinations != 1 || l.rebase) {
             return Err(
                 "search.local_search.combinations and rebase need search.local_search.combine = true"
@@ -313,6 +350,45 @@ mod tests {
         assert_eq!(l.nudges(50), 10);
         assert_eq!(l.nudges(3), 1);
         assert_eq!(LocalSearchParams::default().nudges(50), 0);
+    }
+
+    #[test]
+    fn an_epochs_nudges_are_its_share_whatever_the_island_count() {
+        let l = LocalSearchParams {
+            fraction: 0.5,
+            shared: true,
+            ..Default::default()
+        };
+        let each = LocalSearchParams {
+            per_epoch: false,
+            ..l.clone()
+        };
+        let l = LocalSearchParams {
+            per_epoch: true,
+            ..l
+        };
+        // Per island, 16 islands of 3 round 1.5 up to 2 each: 32 of 48.
+        assert_eq!(each.nudges_per_island(&[3; 16]).iter().sum::<usize>(), 32);
+        for islands in [1, 2, 4, 8, 16] {
+            let counts = vec![48 / islands; islands];
+            let nudges = l.nudges_per_island(&counts);
+            assert_eq!(nudges.iter().sum::<usize>(), 24, "{islands} islands");
+            let (lo, hi) = (nudges.iter().min().unwrap(), nudges.iter().max().unwrap());
+            assert!(hi - lo <= 1, "{nudges:?}");
+        }
+        // A budget-cut island takes what it can; the others take the rest of the epoch's share.
+        assert_eq!(l.nudges_per_island(&[3, 0, 1, 3]), vec![2, 0, 1, 1]);
+        assert_eq!(l.nudges_per_island(&[0, 0]), vec![0, 0]);
+    }
+
+    #[test]
+    fn per_epoch_needs_a_shared_climb() {
+        let mut v = Variation::default();
+        v.local_search.per_epoch = true;
+        let err = v.validate().unwrap_err();
+        assert!(err.contains("search.local_search.per_epoch"), "{err}");
+        v.local_search.shared = true;
+        v.validate().unwrap();
     }
 
     #[test]
