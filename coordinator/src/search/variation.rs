@@ -114,17 +114,14 @@ impl LocalSearchParams {
         let mut left = self.nudges(counts.iter().sum());
         let mut nudges = vec![0; counts.len()];
         // Round-robin one nudge at a time: an island whose count the budget cut short takes
-        // fewer, and the others take its share, so the epoch's total is kept.
+        // fewer, and the others take its share, so the epoch's total is kept. `nudges` never
+        // exceeds the children it is given, so every round deals at least one and this ends.
         while left > 0 {
-            let before = left;
             for (n, &c) in nudges.iter_mut().zip(counts) {
                 if left > 0 && *n < c {
                     *n += 1;
                     left -= 1;
                 }
-            }
-            if left == before {
-                break;
             }
         }
         nudges

@@ -52,18 +52,14 @@ fn nudges_round_to_the_nearest_child() {
 
 #[test]
 fn an_epochs_nudges_are_its_share_whatever_the_island_count() {
-    let l = LocalSearchParams {
+    let each = LocalSearchParams {
         fraction: 0.5,
         shared: true,
         ..Default::default()
     };
-    let each = LocalSearchParams {
-        per_epoch: false,
-        ..l.clone()
-    };
     let l = LocalSearchParams {
         per_epoch: true,
-        ..l
+        ..each.clone()
     };
     // Per island, 16 islands of 3 round 1.5 up to 2 each: 32 of 48.
     assert_eq!(each.nudges_per_island(&[3; 16]).iter().sum::<usize>(), 32);
