@@ -118,6 +118,27 @@ fn several_rebased_combinations_are_bit_identical_on_threads_and_resume() {
     assert!(fingerprint(&resumed) == one, "the resumed run differs");
 }
 
+/// Nudge steps spread over octaves (`step_spread`, session 42): the draw comes from the island's
+/// stream, so the run is bit-identical on 1 and 3 threads; the key reaches the search (another run
+/// than the fixed step), and `step_spread = 0` written out is the fixed-step run to the bit.
+#[test]
+fn a_spread_nudge_step_is_bit_identical_on_threads_and_zero_is_the_fixed_step() {
+    let climb = "insertion = 0.5\nshared = true\ncombine = true";
+    let run = |name: &str, keys: &str, threads: usize| {
+        fingerprint(&run_locally(&config(&scratch_dir(name), 7, keys), threads))
+    };
+    let spread = format!("{climb}\nstep_spread = 2.0");
+    let one = run("spread-1", &spread, 1);
+    assert!(one == run("spread-3", &spread, 3), "1 and 3 threads differ");
+    let fixed = run("spread-fixed", climb, 2);
+    assert!(one != fixed, "a spread step breeds another run");
+    let zero = format!("{climb}\nstep_spread = 0.0");
+    assert!(
+        fixed == run("spread-zero", &zero, 1),
+        "a spread of 0 changed the run"
+    );
+}
+
 #[test]
 fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];

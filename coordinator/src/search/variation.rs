@@ -34,6 +34,10 @@ pub struct LocalSearchParams {
     /// Standard deviation of a nudge, as a fraction of the parameter's range (0.02 of the beam's
     /// length is 0.8 of a voxel along it at 12x40x12).
     pub step: f64,
+    /// Each nudge's step is `step` times 2^u, u drawn uniformly from [-spread, spread] (0: always
+    /// `step`, no draw). A stalled climb needs moves of another size than the one it climbed
+    /// with; a spread of scales offers every size in every epoch without a state to adapt.
+    pub step_spread: f64,
     /// Share of the nudges that instead add one narrow point at a random voxel on the best's
     /// design boundary, giving that voxel another state (see `search::insertion`).
     pub insertion: f64,
@@ -68,6 +72,7 @@ impl Default for LocalSearchParams {
             points: 1,
             probability: 0.2,
             step: 0.02,
+            step_spread: 0.0,
             insertion: 0.0,
             shared: false,
             per_epoch: false,
@@ -144,11 +149,22 @@ impl LocalSearchParams {
         if inserted {
             return;
         }
+        let step = self.nudge_step(rng);
         if self.points == 0 {
-            amorph::genome::perturb(genome, rng, self.probability, self.step, scene.limits());
+            amorph::genome::perturb(genome, rng, self.probability, step, scene.limits());
         } else {
-            amorph::genome::perturb_points(genome, rng, self.points, self.step, scene.limits());
+            amorph::genome::perturb_points(genome, rng, self.points, step, scene.limits());
         }
+    }
+
+    /// One nudge's step: `step`, scaled log-uniformly within `step_spread` octaves when that is
+    /// set (a spread of 0 draws nothing, so earlier configs keep their RNG stream).
+    pub fn nudge_step<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        if self.step_spread == 0.0 {
+            return self.step;
+        }
+        let octaves = rand::RngExt::random_range(rng, -self.step_spread..=self.step_spread);
+        self.step * octaves.exp2()
     }
 }
 
@@ -189,6 +205,10 @@ impl Default for StepAdaptation {
 
 /// More combined designs than this would halve the fittest nudge down to one long before.
 const MAX_COMBINATIONS: usize = 16;
+
+/// Six octaves either way already spans 1/64 to 64 times the step: a nudge of 0.02 of a range
+/// would reach beyond the whole range, and at the other end move nothing a voxel can see.
+const MAX_STEP_SPREAD: f64 = 6.0;
 
 /// The success rate that separates growing from shrinking under the 1/5th rule.
 const ONE_FIFTH: f64 = 0.2;
@@ -259,6 +279,11 @@ impl Variation {
         }
         if !(l.step.is_finite() && l.step > 0.0) {
             return Err("search.local_search.step must be a positive number".into());
+        }
+        if !(l.step_spread.is_finite() && (0.0..=MAX_STEP_SPREAD).contains(&l.step_spread)) {
+            return Err(format!(
+                "search.local_search.step_spread must be in [0, {MAX_STEP_SPREAD}] (octaves)"
+            ));
         }
         if !(1..=MAX_COMBINATIONS).contains(&l.combinations) {
             return Err(format!(

@@ -153,3 +153,55 @@ fn each_bad_field_is_named() {
             .contains("search.local_search.fraction")
     );
 }
+
+#[test]
+fn without_a_spread_the_step_is_fixed_and_draws_nothing() {
+    use rand::{RngExt, SeedableRng};
+    let params = LocalSearchParams::default();
+    let mut a = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let mut b = a.clone();
+    assert_eq!(params.nudge_step(&mut a), params.step);
+    assert_eq!(
+        a.random::<u64>(),
+        b.random::<u64>(),
+        "a spread of 0 must leave the stream where it was, so earlier configs breed as before"
+    );
+}
+
+#[test]
+fn a_spread_scales_the_step_log_uniformly_within_its_octaves() {
+    use rand::SeedableRng;
+    let params = LocalSearchParams {
+        step_spread: 2.0,
+        ..Default::default()
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let n = 20_000;
+    let octaves: Vec<f64> = (0..n)
+        .map(|_| (params.nudge_step(&mut rng) / params.step).log2())
+        .collect();
+    assert!(octaves.iter().all(|o| (-2.0..=2.0).contains(o)));
+    // Uniform on [-2, 2]: each quarter holds a quarter of the draws. Five binomial standard
+    // deviations (sqrt(n p (1 - p)) / n = 0.0031) is a bound a correct draw fails once in ~10^6.
+    for q in 0..4 {
+        let lo = -2.0 + q as f64;
+        let share = octaves.iter().filter(|&&o| o >= lo && o < lo + 1.0).count() as f64 / n as f64;
+        assert!((share - 0.25).abs() < 5.0 * 0.0031, "quarter {q}: {share}");
+    }
+}
+
+#[test]
+fn a_spread_beyond_six_octaves_or_negative_is_named() {
+    for bad in [-0.5, 6.5, f64::NAN] {
+        let mut v = Variation::default();
+        v.local_search.step_spread = bad;
+        let err = v.validate().unwrap_err();
+        assert!(
+            err.contains("search.local_search.step_spread"),
+            "{bad}: {err}"
+        );
+    }
+    let mut v = Variation::default();
+    v.local_search.step_spread = 6.0;
+    assert!(v.validate().is_ok());
+}
