@@ -1,14 +1,15 @@
-//! The simulation: state arrays, the step loop built from the scene's passes, and observables
-//! (centre of mass, momenta, energy) for tasks, tests and studies.
+//! The simulation: state arrays and the step loop built from the scene's passes. What it shows
+//! (centre of mass, momenta, energy) is in `observe`, how a task sets it up beyond its scene in
+//! `setup`.
 
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
 use super::collide::Collisions;
-use super::error::{DynamicsError, Result};
+use super::error::Result;
 use super::integrate::integrate_pass;
-use super::link::{LinkStep, link_energy, link_pass, link_pass_mixed};
+use super::link::{LinkStep, link_pass, link_pass_mixed};
 use super::math::Vec3;
 use super::parallel::Threaded;
 use super::passes::{
@@ -20,6 +21,11 @@ use super::single::SingleCopy;
 use super::state::{Links, Voxels, build_state, link_damping_time};
 use crate::material::Palette;
 use crate::voxel::VoxelGrid;
+
+mod observe;
+mod setup;
+
+pub use observe::Energy;
 
 /// Why a simulation stopped before its end.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
@@ -53,22 +59,6 @@ pub enum Pass {
     Collisions,
     Floor,
     Integrate,
-}
-
-/// Energy split (J). Gravity's and the external loads' potential is −f·x (in `gravitational`),
-/// so only differences are meaningful.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Energy {
-    pub kinetic: f64,
-    pub elastic: f64,
-    pub gravitational: f64,
-    pub contact: f64,
-}
-
-impl Energy {
-    pub fn total(&self) -> f64 {
-        self.kinetic + self.elastic + self.gravitational + self.contact
-    }
 }
 
 /// A running dynamic simulation of one voxel body.
@@ -226,113 +216,6 @@ impl Simulation {
         self.passes = passes;
     }
 
-    /// Starts the actuation clock now: actuated links follow the scene's sinusoid from here on.
-    /// Without an actuation in the scene this does nothing.
-    /// Changes the global damping ratio (`DampingParams::global`) from the next step on, e.g. a
-    /// heavier damping while a body settles. The time step is unchanged: velocity damping up to
-    /// ζ ≈ 1.5 at the lattice's top mode keeps the step stable (h² + 4ζh ≤ 4 at h ≈ 0.58). Refused
-    /// where the scene's own value would be: negative or not finite.
-    pub fn set_global_damping(&mut self, zeta: f64) -> Result<()> {
-        if !(zeta.is_finite() && zeta >= 0.0) {
-            return Err(DynamicsError::InvalidScene {
-                field: "damping.global",
-                value: zeta,
-            });
-        }
-        self.global_damping = global_damping_constants(&self.voxels, self.scene.voxel_size, zeta);
-        self.rebuild_passes();
-        Ok(())
-    }
-
-    pub fn start_actuation(&mut self) {
-        if self.scene.actuation.is_some() {
-            self.actuation_time = Some(self.time);
-            self.rebuild_passes();
-        }
-    }
-
-    /// Sets the actuation's phase at its start, rad (the scene's `actuation.phase`), e.g. to
-    /// switch a settled body on later in the cycle; a scene without actuation has none to set.
-    pub fn set_actuation_phase(&mut self, phase: f64) {
-        if let Some(actuation) = self.scene.actuation.as_mut() {
-            actuation.phase = phase;
-        }
-    }
-
-    /// Holds voxel `i` in place (position and orientation), like a clamp.
-    pub fn fix_voxel(&mut self, i: usize) -> Result<()> {
-        self.check_index(i)?;
-        self.voxels.inv_mass[i] = 0.0;
-        self.voxels.inv_inertia[i] = 0.0;
-        Ok(())
-    }
-
-    /// Tilts the floor to `incline` rad towards the floor's `downhill` direction, e.g. to raise
-    /// an incline slowly as in a tilt-table friction measurement. Needs a floor and
-    /// |incline| < π/2.
-    pub fn set_incline(&mut self, incline: f64) -> Result<()> {
-        let valid = incline.abs() < std::f64::consts::FRAC_PI_2; // false for NaN
-        let Some(floor) = self.scene.floor.as_mut().filter(|_| valid) else {
-            return Err(DynamicsError::InvalidScene {
-                field: "floor.incline",
-                value: incline,
-            });
-        };
-        floor.incline = incline;
-        self.gravity = tilted_gravity(self.scene.gravity, incline, floor.downhill);
-        Ok(())
-    }
-
-    /// Applies a constant external force (N) to voxel `i`, in addition to any other.
-    pub fn add_external_force(&mut self, i: usize, force: Vec3) -> Result<()> {
-        self.check_index(i)?;
-        if self.external.is_empty() {
-            self.external = vec![Vec3::ZERO; self.voxels.len()];
-        }
-        self.external[i] += force;
-        self.rebuild_passes();
-        Ok(())
-    }
-
-    /// Sets the velocity of every voxel to `v + ω × (x − centre)` and its spin to ω: a rigid motion.
-    pub fn set_rigid_velocity(&mut self, v: Vec3, omega: Vec3, centre: Vec3) {
-        let vx = &mut self.voxels;
-        for i in 0..vx.len() {
-            let vel = v + omega.cross(vx.position[i] - centre);
-            vx.velocity[i] = vel;
-            vx.momentum[i] = vel * vx.mass[i];
-            vx.angular_velocity[i] = omega;
-            vx.angular_momentum[i] = omega * (vx.mass[i] * self.scene.voxel_size.powi(2) / 6.0);
-        }
-    }
-
-    /// Sets the velocity (m/s) of voxel `i`.
-    pub fn set_velocity(&mut self, i: usize, velocity: Vec3) -> Result<()> {
-        self.check_index(i)?;
-        self.voxels.velocity[i] = velocity;
-        self.voxels.momentum[i] = velocity * self.voxels.mass[i];
-        Ok(())
-    }
-
-    /// Index of the voxel in grid cell (x, y, z), if filled.
-    pub fn voxel_at(&self, cell: [usize; 3]) -> Option<usize> {
-        self.voxels
-            .cell
-            .iter()
-            .position(|c| [usize::from(c[0]), usize::from(c[1]), usize::from(c[2])] == cell)
-    }
-
-    fn check_index(&self, i: usize) -> Result<()> {
-        if i < self.voxels.len() {
-            Ok(())
-        } else {
-            Err(DynamicsError::VoxelIndex {
-                index: i,
-                count: self.voxels.len(),
-            })
-        }
-    }
-
     /// Linear rest-length factor λ of actuated material now: the cube root of the volume factor.
     pub fn actuation_factor(&self) -> f64 {
         match (&self.scene.actuation, self.actuation_time) {
@@ -483,122 +366,6 @@ impl Simulation {
         }
         Ok(())
     }
-
-    pub fn dt(&self) -> f64 {
-        self.dt
-    }
-
-    pub fn time(&self) -> f64 {
-        self.time
-    }
-
-    pub fn steps(&self) -> u64 {
-        self.steps
-    }
-
-    pub fn scene(&self) -> &DynamicScene {
-        &self.scene
-    }
-
-    pub fn voxel_count(&self) -> usize {
-        self.voxels.len()
-    }
-
-    pub fn link_count(&self) -> usize {
-        self.links.len()
-    }
-
-    pub fn positions(&self) -> &[Vec3] {
-        &self.voxels.position
-    }
-
-    pub fn velocities(&self) -> &[Vec3] {
-        &self.voxels.velocity
-    }
-
-    pub fn orientations(&self) -> &[super::math::Quat] {
-        &self.voxels.orientation
-    }
-
-    /// Grid cell of each voxel.
-    pub fn cells(&self) -> &[[u16; 3]] {
-        &self.voxels.cell
-    }
-
-    pub fn centre_of_mass(&self) -> Vec3 {
-        let v = &self.voxels;
-        let (mut sum, mut mass) = (Vec3::ZERO, 0.0);
-        for i in 0..v.len() {
-            sum += v.position[i] * v.mass[i];
-            mass += v.mass[i];
-        }
-        sum * (1.0 / mass)
-    }
-
-    /// Largest voxel speed, m/s.
-    pub fn max_speed(&self) -> f64 {
-        self.voxels
-            .velocity
-            .iter()
-            .map(|v| v.norm2())
-            .fold(0.0, f64::max)
-            .sqrt()
-    }
-
-    pub fn linear_momentum(&self) -> Vec3 {
-        self.voxels
-            .momentum
-            .iter()
-            .fold(Vec3::ZERO, |acc, &p| acc + p)
-    }
-
-    /// Total angular momentum about the origin: Σ x × p + spin.
-    pub fn angular_momentum(&self) -> Vec3 {
-        let v = &self.voxels;
-        (0..v.len()).fold(Vec3::ZERO, |acc, i| {
-            acc + v.position[i].cross(v.momentum[i]) + v.angular_momentum[i]
-        })
-    }
-
-    pub fn energy(&self) -> Energy {
-        let v = &self.voxels;
-        let s = self.scene.voxel_size;
-        let step = LinkStep {
-            voxel_size: s,
-            actuation_factor: self.actuation_factor(),
-        };
-        let actuated_reach = self.actuated_floor_reach(step.actuation_factor);
-        let mut kinetic = 0.0;
-        let mut gravitational = 0.0;
-        let mut contact = 0.0;
-        for i in 0..v.len() {
-            kinetic += 0.5 * v.momentum[i].norm2() * v.inv_mass[i]
-                + 0.5 * v.angular_momentum[i].norm2() * v.inv_inertia[i];
-            gravitational -= v.mass[i] * self.gravity.dot(v.position[i]);
-            if let Some(f) = self.external.get(i) {
-                gravitational -= f.dot(v.position[i]);
-            }
-            if !self.floor.stiffness.is_empty() {
-                let reach = if v.actuated[i] {
-                    actuated_reach
-                } else {
-                    0.5 * s
-                };
-                let pen = (reach - v.position[i].z).max(0.0);
-                contact += 0.5 * self.floor.stiffness[i] * pen * pen;
-            }
-        }
-        let mut elastic = link_energy(&self.links, v, step);
-        if self.poisson.is_active() {
-            elastic += self.poisson.energy(&self.links, v, step);
-        }
-        Energy {
-            kinetic,
-            elastic,
-            gravitational,
-            contact,
-        }
-    }
 }
 
 /// Gravity of magnitude `g` tilted by `incline` rad from −Z towards the floor direction
@@ -635,66 +402,4 @@ fn global_damping_constants(voxels: &Voxels, s: f64, zeta: f64) -> (Vec<f64>, Ve
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::math::Quat;
-    use super::super::state::TOP_EIGENVALUE;
-    use super::*;
-    use crate::material::{Material, MaterialId};
-    use crate::voxel::GridDims;
-
-    /// Largest eigenvalue of M⁻¹K (translations and rotations) of an n-block at rest, in units
-    /// of (EA/L)/m, by power iteration on the link pass around the rest state.
-    fn top_eigenvalue(n: [usize; 3]) -> f64 {
-        let grid = VoxelGrid::filled(GridDims::new(n[0], n[1], n[2]), MaterialId(0));
-        let palette = Palette(vec![Material::new("rubber", 1e6, 0.35)]);
-        let s = 0.01;
-        let (mut v, links) = build_state(&grid, &palette, s, 0.0).unwrap();
-        let rest = v.position.clone();
-        let count = v.len();
-        // A deterministic start vector with a component along every direction.
-        let mut u: Vec<f64> = (0..6 * count)
-            .map(|i| ((i * 7919) % 13) as f64 - 6.0)
-            .collect();
-        let eps = 1e-9;
-        let mut lambda = 0.0;
-        for _ in 0..300 {
-            let norm = u.iter().map(|x| x * x).sum::<f64>().sqrt();
-            u.iter_mut().for_each(|x| *x /= norm);
-            for i in 0..count {
-                let (sm, si) = (v.mass[i].sqrt(), (v.mass[i] * s * s / 6.0).sqrt());
-                let t = Vec3::new(u[6 * i], u[6 * i + 1], u[6 * i + 2]);
-                let r = Vec3::new(u[6 * i + 3], u[6 * i + 4], u[6 * i + 5]);
-                v.position[i] = rest[i] + t * (eps / sm);
-                v.orientation[i] = Quat::from_rotation_vector(r * (eps / si));
-                v.force[i] = Vec3::ZERO;
-                v.torque[i] = Vec3::ZERO;
-            }
-            let step = LinkStep {
-                voxel_size: s,
-                actuation_factor: 1.0,
-            };
-            link_pass::<false, false>(&links, &mut v, step);
-            let mut w = vec![0.0; 6 * count];
-            for i in 0..count {
-                let (sm, si) = (v.mass[i].sqrt(), (v.mass[i] * s * s / 6.0).sqrt());
-                let f = v.force[i] * (-1.0 / (eps * sm));
-                let t = v.torque[i] * (-1.0 / (eps * si));
-                w[6 * i..6 * i + 6].copy_from_slice(&[f.x, f.y, f.z, t.x, t.y, t.z]);
-            }
-            lambda = w.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
-            u = w;
-        }
-        lambda / (1e6 * s / (1000.0 * s * s * s))
-    }
-
-    #[test]
-    fn damping_reference_bounds_the_lattice_spectrum() {
-        // The stiffness-proportional link damping gives the top mode ζ·√(λ/TOP_EIGENVALUE); it
-        // must not exceed ζ (stability of the explicit step), nor fall far below it.
-        for (n, expected) in [([2, 1, 1], 5.0), ([6, 6, 6], 13.1), ([12, 12, 1], 11.9)] {
-            let lambda = top_eigenvalue(n);
-            assert!(lambda < TOP_EIGENVALUE, "{n:?}: {lambda}");
-            assert!((lambda - expected).abs() < 0.1, "{n:?}: {lambda}");
-        }
-    }
-}
+mod tests;
