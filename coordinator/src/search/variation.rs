@@ -159,7 +159,7 @@ impl LocalSearchParams {
 
     /// One nudge's step: `step`, scaled log-uniformly within `step_spread` octaves when that is
     /// set (a spread of 0 draws nothing, so earlier configs keep their RNG stream).
-    pub fn nudge_step<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+    fn nudge_step<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         if self.step_spread == 0.0 {
             return self.step;
         }
@@ -280,7 +280,8 @@ impl Variation {
         if !(l.step.is_finite() && l.step > 0.0) {
             return Err("search.local_search.step must be a positive number".into());
         }
-        if !(l.step_spread.is_finite() && (0.0..=MAX_STEP_SPREAD).contains(&l.step_spread)) {
+        // NaN and infinities fall outside the range too.
+        if !(0.0..=MAX_STEP_SPREAD).contains(&l.step_spread) {
             return Err(format!(
                 "search.local_search.step_spread must be in [0, {MAX_STEP_SPREAD}] (octaves)"
             ));
