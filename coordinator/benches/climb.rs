@@ -4,7 +4,8 @@
 //! `cargo bench -p amorph-coordinator --bench climb -- <design.json> <config.toml> <epochs>
 //! <nudges> <seeds> <combinations>,<rebase>[,<K>,<R>] [...]`: for each setting (`1,0` is the
 //! session-13 rule: one combination of every improving nudge, on the design they started from;
-//! `K`, `R` make it a race of K climbs for R epochs, the best one going on) and each seed
+//! `K`, `R` make it a race of K climbs for R epochs, the best one going on; a last `,residuals`
+//! picks the nudges by the residual model, `local_search.combine_by`) and each seed
 //! of the comma-separated list, an island holding only the design in `design.json` (a
 //! `best_genome.json` or a test fixture: genome and resolution) breeds `nudges` nudges an epoch
 //! with the `[search.local_search]` keys of `config.toml` (`fraction` 1, `combine` on) and keeps
@@ -22,7 +23,7 @@ use std::sync::Arc;
 use amorph::task::Outcome;
 use amorph::voxel::GridDims;
 use amorph_coordinator::ids::{IslandId, TaskId};
-use amorph_coordinator::search::{Breeding, Individual, Island};
+use amorph_coordinator::search::{Breeding, CombineBy, Individual, Island};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -42,13 +43,18 @@ fn main() {
     let start = scene.evaluate(&genome, dims);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     for setting in &args[5..] {
-        let v: Vec<usize> = (setting.split(','))
+        // A last word `residuals` picks the nudges by the residual model.
+        let (numbers, by) = match setting.strip_suffix(",residuals") {
+            Some(numbers) => (numbers, CombineBy::Residuals),
+            None => (setting.as_str(), CombineBy::Fitness),
+        };
+        let v: Vec<usize> = (numbers.split(','))
             .map(|s| s.parse().expect("a number"))
             .collect();
         let mut variation = config.raw.search.variation();
         let local = &mut variation.local_search;
         (local.fraction, local.combine, local.shared) = (1.0, true, false);
-        (local.combinations, local.rebase) = (v[0], v[1] != 0);
+        (local.combinations, local.rebase, local.combine_by) = (v[0], v[1] != 0, by);
         variation.validate().expect("a valid setting");
         let combining = variation.local_search.combining(scene.limits().max_points);
         let breeding = Breeding {

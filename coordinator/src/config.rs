@@ -270,6 +270,14 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
         return Err("search.migration.topology.probability must be in [0, 1]".into());
     }
     s.variation().validate()?;
+    if s.variation().local_search.combine_by == crate::search::CombineBy::Residuals
+        && !raw.scene.has_residuals()
+    {
+        return Err(format!(
+            "search.local_search.combine_by = \"residuals\": a {} scene's fitness is not a sum of squared residuals",
+            raw.scene.kind()
+        ));
+    }
     let b = &raw.budget;
     if b.evaluations.is_none() && b.wall_seconds.is_none() && b.target_rms_percent.is_none() {
         return Err(

@@ -139,6 +139,43 @@ fn a_spread_nudge_step_is_bit_identical_on_threads_and_zero_is_the_fixed_step() 
     );
 }
 
+/// Nudges picked by the residual model (`combine_by = "residuals"`, session 43), rebased: the
+/// shared climb stays bit-identical on 1 and 3 threads and when stopped and resumed (the pick is
+/// rebuilt from the replayed epoch's outcomes), the key reaches the search (another run than the
+/// improving nudges' combination), and `combine_by = "fitness"` written out is that run to the bit.
+#[test]
+fn nudges_picked_by_their_residuals_are_bit_identical_on_threads_and_resume() {
+    let climb = "insertion = 0.5\nshared = true\ncombine = true\nrebase = true";
+    let residuals = format!("{climb}\ncombine_by = \"residuals\"");
+    let config = |dir: &Path, keys: &str| {
+        let mut config = config(dir, 7, keys);
+        config.raw.search.local_search.fraction = 0.8;
+        config
+    };
+    let run = |name: &str, keys: &str, threads: usize| {
+        fingerprint(&run_locally(&config(&scratch_dir(name), keys), threads))
+    };
+    let one = run("residuals-1", &residuals, 1);
+    assert!(
+        one == run("residuals-3", &residuals, 3),
+        "1 and 3 threads differ"
+    );
+    let fitness = run("residuals-fitness", climb, 2);
+    assert!(one != fitness, "the residual model breeds another run");
+    let explicit = format!("{climb}\ncombine_by = \"fitness\"");
+    assert!(
+        fitness == run("residuals-explicit", &explicit, 1),
+        "the default changed the run"
+    );
+
+    let dir = scratch_dir("residuals-resumed");
+    let mut stopped = config(&dir, &residuals);
+    stopped.raw.budget.evaluations = Some(120);
+    assert_eq!(run_locally(&stopped, 2).evaluations, 120);
+    let resumed = resume_locally(&config(&dir, &residuals), 3);
+    assert!(fingerprint(&resumed) == one, "the resumed run differs");
+}
+
 #[test]
 fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];

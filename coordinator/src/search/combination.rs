@@ -13,11 +13,26 @@
 //! rebuilds it bit for bit.
 
 use amorph::genome::Genome;
+use serde::{Deserialize, Serialize};
 
-/// How an epoch's improving nudges are added up (`[search.local_search]` `combine`,
+/// Which of an epoch's nudges are added up (`[search.local_search]` `combine_by`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CombineBy {
+    /// Every nudge that beat the design it started from, fittest first (session 13).
+    #[default]
+    Fitness,
+    /// The nudges a linear model of the task's residuals picks (`search::residual_model`); a
+    /// task whose fitness is not a sum of squared residuals cannot use it.
+    Residuals,
+}
+
+/// How an epoch's nudges are added up (`[search.local_search]` `combine`, `combine_by`,
 /// `combinations`, `rebase`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Combining {
+    /// Which nudges: the improving ones, or the residual model's pick.
+    pub by: CombineBy,
     /// The genome's point limit: appended points stop there.
     pub max_points: usize,
     /// How many combined designs to offer: all the improving nudges, then the fittest half, the
@@ -194,6 +209,7 @@ mod tests {
 
     fn combining(combinations: usize, rebase: bool) -> Combining {
         Combining {
+            by: CombineBy::Fitness,
             max_points: 10,
             combinations,
             rebase,

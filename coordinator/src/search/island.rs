@@ -15,7 +15,7 @@ use amorph::voxel::GridDims;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use super::combination::{Combining, combinations};
+use super::combination::Combining;
 use super::insertion::BoundarySite;
 use super::variation::Variation;
 use crate::ids::{IslandId, TaskId};
@@ -298,45 +298,6 @@ impl Island {
         replaced
     }
 
-    /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
-    /// their dominant parent's slot, before any child of the epoch is applied), fittest first
-    /// (child order on a tie), added up by [`combinations`]. The slot's occupant after the epoch,
-    /// what `rebase` builds on, is the last child `wins` gives it, or the one it had.
-    fn combine_improving_nudges(
-        &self,
-        children: &[Child],
-        outcomes: &[&Outcome],
-        wins: &[bool],
-        combining: &Combining,
-    ) -> Vec<Genome> {
-        let mut improving: Vec<(usize, &Child)> = children
-            .iter()
-            .enumerate()
-            .filter(|(k, c)| {
-                c.nudge
-                    && !c.combined
-                    && outcomes[*k].is_fitter_than(&self.population[c.dominant_parent].outcome)
-            })
-            .collect();
-        // Nudges of one epoch share one base (the island's best, or the run's under `shared`).
-        let Some(slot) = improving.first().map(|(_, c)| c.dominant_parent) else {
-            return Vec::new();
-        };
-        improving.retain(|(_, c)| c.dominant_parent == slot);
-        let base = &self.population[slot].genome;
-        let onto = (children.iter().zip(wins))
-            .rfind(|(c, won)| **won && c.dominant_parent == slot)
-            .map_or(base, |(c, _)| &c.genome);
-        // A stable sort, so ties keep child order.
-        improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
-        let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
-        let offered = combinations(base, onto, &genomes, combining);
-        if !offered.is_empty() {
-            info!(island = %self.id, improving = genomes.len(), offered = offered.len(), "improving nudges combined");
-        }
-        offered
-    }
-
     /// Counts crossover children of this epoch that were not evaluated because they make their
     /// dominant parent's design (`search.skip_unchanged`): tried, and they did not replace it, so
     /// the adapted step is what it would have been had they been evaluated.
@@ -388,5 +349,6 @@ impl Island {
     }
 }
 
+mod combining;
 #[cfg(test)]
 mod tests;

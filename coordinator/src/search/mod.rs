@@ -8,6 +8,7 @@ mod fixtures;
 mod insertion;
 mod island;
 mod migration;
+mod residual_model;
 mod resolution;
 mod split;
 mod stall;
@@ -15,7 +16,7 @@ mod step_kind;
 mod unchanged;
 mod variation;
 
-pub use combination::Combining;
+pub use combination::{CombineBy, Combining};
 pub use diversity::{
     DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
 };

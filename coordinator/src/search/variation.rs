@@ -9,7 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::combination::Combining;
+use super::combination::{CombineBy, Combining};
 use super::insertion::BoundarySite;
 
 /// A (1+λ) evolution strategy inside crowding: some children of every epoch are the island's best
@@ -56,6 +56,10 @@ pub struct LocalSearchParams {
     /// offered as the first nudge of the next epoch (`search::combination`): the climb can then
     /// take several steps per epoch instead of one.
     pub combine: bool,
+    /// With `combine`: which nudges are added up, `fitness` (every improving one, fittest first)
+    /// or `residuals` (those a linear model of the task's residuals picks, among all of the
+    /// epoch's nudges: `search::residual_model`).
+    pub combine_by: CombineBy,
     /// With `combine`: how many combined designs an epoch offers, all the improving nudges, then
     /// the fittest half, quarter, ... (distinct ones only; 1: all of them, the session-13 rule).
     pub combinations: usize,
@@ -77,6 +81,7 @@ impl Default for LocalSearchParams {
             shared: false,
             per_epoch: false,
             combine: false,
+            combine_by: CombineBy::Fitness,
             combinations: 1,
             rebase: false,
         }
@@ -87,6 +92,7 @@ impl LocalSearchParams {
     /// How an epoch's improving nudges are added up, or `None` without `combine`.
     pub fn combining(&self, max_points: usize) -> Option<Combining> {
         self.combine.then_some(Combining {
+            by: self.combine_by,
             max_points,
             combinations: self.combinations,
             rebase: self.rebase,
@@ -296,9 +302,9 @@ impl Variation {
                 "search.local_search.per_epoch needs shared = true (one climb for the run)".into(),
             );
         }
-        if !l.combine && (l.combinations != 1 || l.rebase) {
+        if !l.combine && (l.combinations != 1 || l.rebase || l.combine_by != CombineBy::Fitness) {
             return Err(
-                "search.local_search.combinations and rebase need search.local_search.combine = true"
+                "search.local_search.combinations, combine_by and rebase need search.local_search.combine = true"
                     .into(),
             );
         }

@@ -88,6 +88,8 @@ pub trait Task {
     /// Peak memory of an evaluation per voxel of the resolution, bytes, measured and rounded up
     /// (docs/cluster.md, "Memory budget"), so a worker refuses a task it could not finish.
     const BYTES_PER_VOXEL: u64;
+    /// Whether the fitness is minus a sum of squared residuals that [`Task::residuals`] gives.
+    const HAS_RESIDUALS: bool = false;
 
     /// Checks every field, naming the first bad one.
     fn validate(&self) -> Result<(), SceneError>;
@@ -120,6 +122,13 @@ pub trait Task {
         metrics: &Self::Metrics,
         dims: GridDims,
     ) -> Result<(), String>;
+    /// The terms whose squares, summed, are minus the fitness, each with the position it is
+    /// measured at (a station along a beam): what a least-squares search can model, since the
+    /// residuals of a small change add up where fitnesses do not. `None` unless
+    /// [`Task::HAS_RESIDUALS`].
+    fn residuals(_metrics: &Self::Metrics) -> Option<Vec<[f64; 2]>> {
+        None
+    }
     /// One line for progress and logs.
     fn headline(&self, metrics: &Self::Metrics) -> String;
     /// The value of [`Task::FIGURE`] for a design.
@@ -310,6 +319,11 @@ macro_rules! tasks {
                 }
             }
 
+            /// Whether the task's fitness is a sum of squared residuals ([`Task::residuals`]).
+            pub fn has_residuals(&self) -> bool {
+                match self { $(Scene::$variant(_) => <$scene as Task>::HAS_RESIDUALS),+ }
+            }
+
             /// Whether the task has a stop target (`budget.target_rms_percent`).
             pub fn has_target(&self) -> bool {
                 match self { $(Scene::$variant(_) => <$scene as Task>::HAS_TARGET),+ }
@@ -369,6 +383,13 @@ macro_rules! tasks {
                         s.simulator_settings(dims, m)
                     }),+
                 }
+            }
+        }
+
+        impl Metrics {
+            /// The task's residuals of these metrics ([`Task::residuals`]).
+            pub fn residuals(&self) -> Option<Vec<[f64; 2]>> {
+                match self { $(Metrics::$variant(m) => <$scene as Task>::residuals(m)),+ }
             }
         }
     };

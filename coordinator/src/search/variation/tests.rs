@@ -140,11 +140,12 @@ fn each_bad_field_is_named() {
     );
     v = Variation::default();
     v.local_search.rebase = true;
-    assert!(
-        v.validate()
-            .unwrap_err()
-            .contains("combinations and rebase")
-    );
+    assert!(v.validate().unwrap_err().contains("rebase need"));
+    v = Variation::default();
+    v.local_search.combine_by = crate::search::CombineBy::Residuals;
+    assert!(v.validate().unwrap_err().contains("combine_by"));
+    v.local_search.combine = true;
+    assert!(v.validate().is_ok());
     v = Variation::default();
     v.local_search.fraction = f64::NAN;
     assert!(

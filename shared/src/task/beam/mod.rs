@@ -30,6 +30,7 @@ impl Task for BeamScene {
         log: true,
     };
     const HAS_TARGET: bool = true;
+    const HAS_RESIDUALS: bool = true;
     /// The static solve held 11.2 kB per voxel from 12x48x12 to 32x96x32.
     const BYTES_PER_VOXEL: u64 = 16 << 10;
 
@@ -83,6 +84,18 @@ impl Task for BeamScene {
         dims: GridDims,
     ) -> Result<(), String> {
         report::check_metrics(self, fitness, metrics, dims)
+    }
+
+    /// Each station after the clamp: its position and its normalized deflection less the
+    /// target's (the fitness sums their squares, `report::check_metrics`).
+    fn residuals(m: &BeamMetrics) -> Option<Vec<[f64; 2]>> {
+        Some(
+            m.profile
+                .iter()
+                .skip(1)
+                .map(|&[t, w, target]| [t, w - target])
+                .collect(),
+        )
     }
 
     fn headline(&self, m: &BeamMetrics) -> String {

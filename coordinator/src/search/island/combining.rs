@@ -1,0 +1,132 @@
+//! Which of an epoch's nudges an island adds up for the next epoch (`local_search.combine`):
+//! the improving ones (`search::combination`), or the residual model's pick
+//! (`search::residual_model`). Both read the epoch's children and outcomes only, so a replayed
+//! epoch offers the same designs.
+
+use amorph::genome::Genome;
+use amorph::task::Outcome;
+use tracing::info;
+
+use super::{Child, Island};
+use crate::search::combination::{CombineBy, Combining, combinations};
+use crate::search::residual_model::{self, Measured, Nudged};
+
+impl Island {
+    /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
+    /// their dominant parent's slot, before any child of the epoch is applied), fittest first
+    /// (child order on a tie), added up by [`combinations`]. The slot's occupant after the epoch,
+    /// what `rebase` builds on, is the last child `wins` gives it, or the one it had.
+    pub(super) fn combine_improving_nudges(
+        &self,
+        children: &[Child],
+        outcomes: &[&Outcome],
+        wins: &[bool],
+        combining: &Combining,
+    ) -> Vec<Genome> {
+        if combining.by == CombineBy::Residuals {
+            return self.combine_by_residuals(children, outcomes, wins, combining);
+        }
+        let mut improving: Vec<(usize, &Child)> = children
+            .iter()
+            .enumerate()
+            .filter(|(k, c)| {
+                c.nudge
+                    && !c.combined
+                    && outcomes[*k].is_fitter_than(&self.population[c.dominant_parent].outcome)
+            })
+            .collect();
+        // Nudges of one epoch share one base (the island's best, or the run's under `shared`).
+        let Some(slot) = improving.first().map(|(_, c)| c.dominant_parent) else {
+            return Vec::new();
+        };
+        improving.retain(|(_, c)| c.dominant_parent == slot);
+        let base = &self.population[slot].genome;
+        let onto = Self::occupant_after(children, wins, slot, base);
+        // A stable sort, so ties keep child order.
+        improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
+        let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
+        let offered = combinations(base, onto, &genomes, combining);
+        if !offered.is_empty() {
+            info!(island = %self.id, improving = genomes.len(), offered = offered.len(), "improving nudges combined");
+        }
+        offered
+    }
+
+    /// The genome that holds `slot` after the epoch: the last child `wins` gives it, or `base`.
+    fn occupant_after<'a>(
+        children: &'a [Child],
+        wins: &[bool],
+        slot: usize,
+        base: &'a Genome,
+    ) -> &'a Genome {
+        (children.iter().zip(wins))
+            .rfind(|(c, won)| **won && c.dominant_parent == slot)
+            .map_or(base, |(c, _)| &c.genome)
+    }
+
+    /// The nudges of this epoch (improving or not, their residuals lined up with their base's)
+    /// that the residual model picks ([`residual_model::select`]), added up in the order it
+    /// picked them by [`combinations`]. Nothing when the base or the nudges carry no residuals.
+    fn combine_by_residuals(
+        &self,
+        children: &[Child],
+        outcomes: &[&Outcome],
+        wins: &[bool],
+        combining: &Combining,
+    ) -> Vec<Genome> {
+        let Some(slot) = (children.iter())
+            .find(|c| c.nudge && !c.combined)
+            .map(|c| c.dominant_parent)
+        else {
+            return Vec::new();
+        };
+        let base = &self.population[slot];
+        let Some(base_residuals) = base.outcome.metrics().and_then(|m| m.residuals()) else {
+            return Vec::new();
+        };
+        let nudges: Vec<Nudged> = (children.iter().zip(outcomes))
+            .filter(|(c, _)| c.nudge && !c.combined && c.dominant_parent == slot)
+            .filter_map(|(c, o)| {
+                let residuals = o.metrics()?.residuals()?;
+                Some(Nudged {
+                    genome: &c.genome,
+                    residuals: residual_model::aligned(&base_residuals, &residuals)?,
+                })
+            })
+            .collect();
+        let values: Vec<f64> = base_residuals.iter().map(|r| r[1]).collect();
+        let base_measured = Measured {
+            genome: &base.genome,
+            residuals: &values,
+        };
+        // Rebased, the prediction starts from the slot's occupant after the epoch, whose own
+        // residuals are measured: the winning nudge, or last epoch's combination.
+        let winner = (children.iter().zip(outcomes).zip(wins))
+            .rfind(|((c, _), won)| **won && c.dominant_parent == slot)
+            .map(|((c, o), _)| (&c.genome, *o));
+        let onto_values: Vec<f64>;
+        let onto = match winner {
+            Some((genome, outcome)) if combining.rebase => {
+                let Some(residuals) = (outcome.metrics())
+                    .and_then(|m| m.residuals())
+                    .and_then(|r| residual_model::aligned(&base_residuals, &r))
+                else {
+                    return Vec::new();
+                };
+                onto_values = residuals;
+                Measured {
+                    genome,
+                    residuals: &onto_values,
+                }
+            }
+            _ => base_measured,
+        };
+        let chosen = residual_model::select(&base_measured, &onto, &nudges, combining.max_points);
+        let genomes: Vec<&Genome> = chosen.iter().map(|&k| nudges[k].genome).collect();
+        let offered = combinations(&base.genome, onto.genome, &genomes, combining);
+        if !offered.is_empty() {
+            info!(island = %self.id, nudges = nudges.len(), chosen = genomes.len(), offered = offered.len(), "nudges combined by their residuals");
+        }
+        offered
+    }
+}
