@@ -77,45 +77,54 @@ fn a_shared_climb_is_bit_identical_on_1_and_3_threads_and_never_loses_the_best()
     );
 }
 
-/// Several combinations, built on the design that won the slot (`combinations = 3`, `rebase =
-/// true`, session 37): the shared climb stays bit-identical on 1 and 3 threads and when stopped
-/// and resumed (the offered designs are rebuilt from the replayed epoch), the keys reach the
-/// search (the run is not the one-combination run), and `combinations = 1` without `rebase` is the
-/// one-combination run to the bit.
-#[test]
-fn several_rebased_combinations_are_bit_identical_on_threads_and_resume() {
-    let climb = "insertion = 0.5\nshared = true\ncombine = true";
-    let several = format!("{climb}\ncombinations = 3\nrebase = true");
-    // Most children nudge the best, as in the arc's runs (half there, of larger epochs), so that
-    // epochs have several improving nudges to add up.
+/// A climb key's contract: with `keys` added to `climb`, the shared climb (most children nudges of
+/// the best, as in the arc's runs, so that epochs have several nudges to add up) is bit-identical
+/// on 1 and 3 threads and when stopped at an epoch's end and resumed (the offered designs are
+/// rebuilt from the replayed epoch); the keys reach the search (another run than `climb` alone);
+/// and `climb` with `defaults` written out is `climb`'s run to the bit.
+fn assert_a_climb_key(name: &str, climb: &str, keys: &str, defaults: &str) {
     let config = |dir: &Path, keys: &str| {
         let mut config = config(dir, 7, keys);
         config.raw.search.local_search.fraction = 0.8;
         config
     };
-    let run = |name: &str, keys: &str, threads: usize| {
-        fingerprint(&run_locally(&config(&scratch_dir(name), keys), threads))
+    let run = |tag: &str, keys: &str, threads: usize| {
+        let dir = scratch_dir(&format!("{name}-{tag}"));
+        fingerprint(&run_locally(&config(&dir, keys), threads))
     };
-    let one = run("combinations-1", &several, 1);
+    let with = format!("{climb}\n{keys}");
+    let one = run("1", &with, 1);
+    assert!(one == run("3", &with, 3), "{name}: 1 and 3 threads differ");
+    let without = run("without", climb, 1);
+    assert!(one != without, "{name}: the keys breed the same run");
+    let explicit = format!("{climb}\n{defaults}");
     assert!(
-        one == run("combinations-3", &several, 3),
-        "1 and 3 threads differ"
-    );
-    let old = run("combinations-old", climb, 1);
-    assert!(one != old, "three rebased combinations breed another run");
-    let explicit = format!("{climb}\ncombinations = 1\nrebase = false");
-    assert!(
-        old == run("combinations-explicit", &explicit, 2),
-        "the defaults changed the run"
+        without == run("defaults", &explicit, 2),
+        "{name}: the defaults changed the run"
     );
 
     // Stopped at the end of an epoch (30 initial + 3 epochs of 30) and resumed to 240.
-    let dir = scratch_dir("combinations-resumed");
-    let mut stopped = config(&dir, &several);
+    let dir = scratch_dir(&format!("{name}-resumed"));
+    let mut stopped = config(&dir, &with);
     stopped.raw.budget.evaluations = Some(120);
     assert_eq!(run_locally(&stopped, 2).evaluations, 120);
-    let resumed = resume_locally(&config(&dir, &several), 3);
-    assert!(fingerprint(&resumed) == one, "the resumed run differs");
+    let resumed = resume_locally(&config(&dir, &with), 3);
+    assert!(
+        fingerprint(&resumed) == one,
+        "{name}: the resumed run differs"
+    );
+}
+
+/// Several combinations, built on the design that won the slot (`combinations = 3`, `rebase =
+/// true`, session 37); `combinations = 1` without `rebase` is the one-combination run.
+#[test]
+fn several_rebased_combinations_are_bit_identical_on_threads_and_resume() {
+    assert_a_climb_key(
+        "combinations",
+        "insertion = 0.5\nshared = true\ncombine = true",
+        "combinations = 3\nrebase = true",
+        "combinations = 1\nrebase = false",
+    );
 }
 
 /// Nudge steps spread over octaves (`step_spread`, session 42): the draw comes from the island's
@@ -140,40 +149,16 @@ fn a_spread_nudge_step_is_bit_identical_on_threads_and_zero_is_the_fixed_step() 
 }
 
 /// Nudges picked by the residual model (`combine_by = "residuals"`, session 43), rebased: the
-/// shared climb stays bit-identical on 1 and 3 threads and when stopped and resumed (the pick is
-/// rebuilt from the replayed epoch's outcomes), the key reaches the search (another run than the
-/// improving nudges' combination), and `combine_by = "fitness"` written out is that run to the bit.
+/// pick is rebuilt from the replayed epoch's outcomes; `combine_by = "fitness"` written out is the
+/// improving nudges' combination.
 #[test]
 fn nudges_picked_by_their_residuals_are_bit_identical_on_threads_and_resume() {
-    let climb = "insertion = 0.5\nshared = true\ncombine = true\nrebase = true";
-    let residuals = format!("{climb}\ncombine_by = \"residuals\"");
-    let config = |dir: &Path, keys: &str| {
-        let mut config = config(dir, 7, keys);
-        config.raw.search.local_search.fraction = 0.8;
-        config
-    };
-    let run = |name: &str, keys: &str, threads: usize| {
-        fingerprint(&run_locally(&config(&scratch_dir(name), keys), threads))
-    };
-    let one = run("residuals-1", &residuals, 1);
-    assert!(
-        one == run("residuals-3", &residuals, 3),
-        "1 and 3 threads differ"
+    assert_a_climb_key(
+        "residuals",
+        "insertion = 0.5\nshared = true\ncombine = true\nrebase = true",
+        "combine_by = \"residuals\"",
+        "combine_by = \"fitness\"",
     );
-    let fitness = run("residuals-fitness", climb, 2);
-    assert!(one != fitness, "the residual model breeds another run");
-    let explicit = format!("{climb}\ncombine_by = \"fitness\"");
-    assert!(
-        fitness == run("residuals-explicit", &explicit, 1),
-        "the default changed the run"
-    );
-
-    let dir = scratch_dir("residuals-resumed");
-    let mut stopped = config(&dir, &residuals);
-    stopped.raw.budget.evaluations = Some(120);
-    assert_eq!(run_locally(&stopped, 2).evaluations, 120);
-    let resumed = resume_locally(&config(&dir, &residuals), 3);
-    assert!(fingerprint(&resumed) == one, "the resumed run differs");
 }
 
 #[test]
