@@ -269,8 +269,9 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     {
         return Err("search.migration.topology.probability must be in [0, 1]".into());
     }
-    s.variation().validate()?;
-    if s.variation().local_search.combine_by == crate::search::CombineBy::Residuals
+    let variation = s.variation();
+    variation.validate()?;
+    if variation.local_search.combine_by == crate::search::CombineBy::Residuals
         && !raw.scene.has_residuals()
     {
         return Err(format!(

@@ -264,7 +264,7 @@ impl Island {
 
     /// Applies an epoch's evaluated children in order ([`Island::winners`]). Returns how many
     /// replaced their dominant parent. With `combine` (`local_search.combine`), also adds up the
-    /// nudges that beat the design they were nudged from, for the next epoch.
+    /// nudges `combine_by` picks, for the next epoch.
     pub fn apply(
         &mut self,
         children: Vec<Child>,
@@ -275,7 +275,7 @@ impl Island {
         let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
         let wins = self.winners(&children, &refs);
         self.combinations = combine.map_or_else(Vec::new, |combining| {
-            self.combine_improving_nudges(&children, &refs, &wins, &combining)
+            self.combine_nudges(&children, &refs, &wins, &combining)
         });
         let mut replaced = 0;
         for ((child, (task, outcome)), wins) in children.into_iter().zip(outcomes).zip(wins) {

@@ -12,20 +12,33 @@ use crate::search::combination::{CombineBy, Combining, combinations};
 use crate::search::residual_model::{self, Measured, Nudged};
 
 impl Island {
-    /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
-    /// their dominant parent's slot, before any child of the epoch is applied), fittest first
-    /// (child order on a tie), added up by [`combinations`]. The slot's occupant after the epoch,
-    /// what `rebase` builds on, is the last child `wins` gives it, or the one it had.
-    pub(super) fn combine_improving_nudges(
+    /// The designs this epoch's nudges offer the next epoch, as `combining.by` picks them.
+    pub(super) fn combine_nudges(
         &self,
         children: &[Child],
         outcomes: &[&Outcome],
         wins: &[bool],
         combining: &Combining,
     ) -> Vec<Genome> {
-        if combining.by == CombineBy::Residuals {
-            return self.combine_by_residuals(children, outcomes, wins, combining);
+        match combining.by {
+            CombineBy::Fitness => {
+                self.combine_improving_nudges(children, outcomes, wins, combining)
+            }
+            CombineBy::Residuals => self.combine_by_residuals(children, outcomes, wins, combining),
         }
+    }
+
+    /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
+    /// their dominant parent's slot, before any child of the epoch is applied), fittest first
+    /// (child order on a tie), added up by [`combinations`]. The slot's occupant after the epoch,
+    /// what `rebase` builds on, is the last child `wins` gives it, or the one it had.
+    fn combine_improving_nudges(
+        &self,
+        children: &[Child],
+        outcomes: &[&Outcome],
+        wins: &[bool],
+        combining: &Combining,
+    ) -> Vec<Genome> {
         let mut improving: Vec<(usize, &Child)> = children
             .iter()
             .enumerate()
@@ -41,7 +54,7 @@ impl Island {
         };
         improving.retain(|(_, c)| c.dominant_parent == slot);
         let base = &self.population[slot].genome;
-        let onto = Self::occupant_after(children, wins, slot, base);
+        let onto = last_winner(children, wins, slot).map_or(base, |k| &children[k].genome);
         // A stable sort, so ties keep child order.
         improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
         let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
@@ -50,18 +63,6 @@ impl Island {
             info!(island = %self.id, improving = genomes.len(), offered = offered.len(), "improving nudges combined");
         }
         offered
-    }
-
-    /// The genome that holds `slot` after the epoch: the last child `wins` gives it, or `base`.
-    fn occupant_after<'a>(
-        children: &'a [Child],
-        wins: &[bool],
-        slot: usize,
-        base: &'a Genome,
-    ) -> &'a Genome {
-        (children.iter().zip(wins))
-            .rfind(|(c, won)| **won && c.dominant_parent == slot)
-            .map_or(base, |(c, _)| &c.genome)
     }
 
     /// The nudges of this epoch (improving or not, their residuals lined up with their base's)
@@ -101,13 +102,10 @@ impl Island {
         };
         // Rebased, the prediction starts from the slot's occupant after the epoch, whose own
         // residuals are measured: the winning nudge, or last epoch's combination.
-        let winner = (children.iter().zip(outcomes).zip(wins))
-            .rfind(|((c, _), won)| **won && c.dominant_parent == slot)
-            .map(|((c, o), _)| (&c.genome, *o));
         let onto_values: Vec<f64>;
-        let onto = match winner {
-            Some((genome, outcome)) if combining.rebase => {
-                let Some(residuals) = (outcome.metrics())
+        let onto = match last_winner(children, wins, slot) {
+            Some(k) if combining.rebase => {
+                let Some(residuals) = (outcomes[k].metrics())
                     .and_then(|m| m.residuals())
                     .and_then(|r| residual_model::aligned(&base_residuals, &r))
                 else {
@@ -115,7 +113,7 @@ impl Island {
                 };
                 onto_values = residuals;
                 Measured {
-                    genome,
+                    genome: &children[k].genome,
                     residuals: &onto_values,
                 }
             }
@@ -129,4 +127,10 @@ impl Island {
         }
         offered
     }
+}
+
+/// The child that holds `slot` after the epoch (the last one `wins` gives it), if any: what
+/// `rebase` builds on.
+fn last_winner(children: &[Child], wins: &[bool], slot: usize) -> Option<usize> {
+    (children.iter().zip(wins)).rposition(|(c, won)| *won && c.dominant_parent == slot)
 }
