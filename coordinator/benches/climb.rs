@@ -5,7 +5,8 @@
 //! <nudges> <seeds> <combinations>,<rebase>[,<K>,<R>] [...]`: for each setting (`1,0` is the
 //! session-13 rule: one combination of every improving nudge, on the design they started from;
 //! `K`, `R` make it a race of K climbs for R epochs, the best one going on; a last `,residuals`
-//! picks the nudges by the residual model, `local_search.combine_by`) and each seed
+//! picks the nudges by the residual model, `local_search.combine_by`, and `,least_squares:R` takes
+//! its least-squares step with `reach` R) and each seed
 //! of the comma-separated list, an island holding only the design in `design.json` (a
 //! `best_genome.json` or a test fixture: genome and resolution) breeds `nudges` nudges an epoch
 //! with the `[search.local_search]` keys of `config.toml` (`fraction` 1, `combine` on) and keeps
@@ -43,10 +44,18 @@ fn main() {
     let start = scene.evaluate(&genome, dims);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     for setting in &args[5..] {
-        // A last word `residuals` picks the nudges by the residual model.
-        let (numbers, by) = match setting.strip_suffix(",residuals") {
-            Some(numbers) => (numbers, CombineBy::Residuals),
-            None => (setting.as_str(), CombineBy::Fitness),
+        // A last word `residuals` picks the nudges by the residual model; `least_squares:R`
+        // takes its least-squares step, each coefficient within R.
+        let (numbers, by, reach) = if let Some(numbers) = setting.strip_suffix(",residuals") {
+            (numbers, CombineBy::Residuals, 1.0)
+        } else if let Some((numbers, reach)) = setting.split_once(",least_squares:") {
+            (
+                numbers,
+                CombineBy::LeastSquares,
+                reach.parse().expect("a reach"),
+            )
+        } else {
+            (setting.as_str(), CombineBy::Fitness, 1.0)
         };
         let v: Vec<usize> = (numbers.split(','))
             .map(|s| s.parse().expect("a number"))
@@ -54,9 +63,10 @@ fn main() {
         let mut variation = config.raw.search.variation();
         let local = &mut variation.local_search;
         (local.fraction, local.combine, local.shared) = (1.0, true, false);
-        (local.combinations, local.rebase, local.combine_by) = (v[0], v[1] != 0, by);
+        (local.combinations, local.rebase) = (v[0], v[1] != 0);
+        (local.combine_by, local.reach) = (by, reach);
         variation.validate().expect("a valid setting");
-        let combining = variation.local_search.combining(scene.limits().max_points);
+        let combining = variation.local_search.combining(scene.limits());
         let breeding = Breeding {
             mutation: config.raw.search.mutation.clone(),
             variation,

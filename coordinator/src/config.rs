@@ -271,11 +271,11 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     }
     let variation = s.variation();
     variation.validate()?;
-    if variation.local_search.combine_by == crate::search::CombineBy::Residuals
-        && !raw.scene.has_residuals()
-    {
+    let by = variation.local_search.combine_by;
+    if by.needs_residuals() && !raw.scene.has_residuals() {
         return Err(format!(
-            "search.local_search.combine_by = \"residuals\": a {} scene's fitness is not a sum of squared residuals",
+            "search.local_search.combine_by = \"{}\": a {} scene's fitness is not a sum of squared residuals",
+            by.key(),
             raw.scene.kind()
         ));
     }

@@ -161,6 +161,20 @@ fn nudges_picked_by_their_residuals_are_bit_identical_on_threads_and_resume() {
     );
 }
 
+/// The residual model's least-squares step (`combine_by = "least_squares"`, session 44), with
+/// its halvings: the coefficients come from a fixed-order descent on the replayed epoch's
+/// outcomes, so the run is the same on 1 and 3 threads and across a resume, and another run than
+/// the improving nudges' combination.
+#[test]
+fn a_least_squares_step_is_bit_identical_on_threads_and_resume() {
+    assert_a_climb_key(
+        "least-squares",
+        "insertion = 0.5\nshared = true\ncombine = true\nrebase = true\ncombinations = 3",
+        "combine_by = \"least_squares\"\nreach = 2.0",
+        "combine_by = \"fitness\"",
+    );
+}
+
 #[test]
 fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];
@@ -170,7 +184,7 @@ fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     assert_eq!(one.evaluations, 240);
     assert_eq!(one.populations, three.populations);
 
-    let limits = configs[0].raw.scene.limits().clone();
+    let limits = *configs[0].raw.scene.limits();
     let materials = configs[0].raw.scene.palette().len();
     for ind in one.populations.iter().flatten() {
         let genome: &Genome = &ind.genome;

@@ -201,23 +201,29 @@ fn the_search_variation_keys_default_off_and_a_bad_one_is_named() {
     assert!(err.contains("search.local_search.fraction"), "{err}");
 }
 
-/// The residual model needs a task whose fitness is a sum of squared residuals: a beam takes the
-/// key, a robot's config is refused with the key and the scene's kind named.
+/// The residual model (its pick or its least-squares step) needs a task whose fitness is a sum of
+/// squared residuals: a beam takes the key, a robot's config is refused with the key, its value
+/// and the scene's kind named.
 #[test]
 fn combining_by_residuals_needs_a_least_squares_task() {
-    let keys =
-        "[search.local_search]\nfraction = 0.5\ncombine = true\ncombine_by = \"residuals\"\n";
-    let beam = MINIMAL.replace("[budget]", &format!("{keys}[budget]"));
-    RunConfig::parse(&beam, Path::new("t.toml")).unwrap();
-    let robot = format!(
-        "name = \"t\"\n{keys}[budget]\nevaluations = 100\n[resolution]\nlevels = [[6, 6, 6]]\n\
-         [scene]\nkind = \"locomotion\"\n"
-    );
-    let err = RunConfig::parse(&robot, Path::new("t.toml"))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("search.local_search.combine_by") && err.contains("locomotion"),
-        "{err}"
-    );
+    for by in ["residuals", "least_squares"] {
+        let keys = format!(
+            "[search.local_search]\nfraction = 0.5\ncombine = true\ncombine_by = \"{by}\"\n"
+        );
+        let beam = MINIMAL.replace("[budget]", &format!("{keys}[budget]"));
+        RunConfig::parse(&beam, Path::new("t.toml")).unwrap();
+        let robot = format!(
+            "name = \"t\"\n{keys}[budget]\nevaluations = 100\n[resolution]\nlevels = [[6, 6, 6]]\n\
+             [scene]\nkind = \"locomotion\"\n"
+        );
+        let err = RunConfig::parse(&robot, Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("search.local_search.combine_by")
+                && err.contains(by)
+                && err.contains("locomotion"),
+            "{err}"
+        );
+    }
 }

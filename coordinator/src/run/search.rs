@@ -204,8 +204,8 @@ impl Search {
         evaluator: &mut dyn Evaluator,
         ctx: &RunContext<'_>,
     ) -> Result<Vec<usize>> {
-        let combine = (self.breeding.variation.local_search)
-            .combining(self.breeding.scene.limits().max_points);
+        let combine =
+            (self.breeding.variation.local_search).combining(self.breeding.scene.limits());
         let (children, genomes, batch) = match self.overlap.take() {
             Some(overlap) if overlap.dims == dims => {
                 overlap.held.keep(self, ctx)?;

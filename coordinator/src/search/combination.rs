@@ -12,7 +12,7 @@
 //! The combination is a pure function of the epoch's genomes and outcomes, so a replayed run
 //! rebuilds it bit for bit.
 
-use amorph::genome::Genome;
+use amorph::genome::{Genome, GenomeLimits};
 use serde::{Deserialize, Serialize};
 
 /// Which of an epoch's nudges are added up (`[search.local_search]` `combine_by`).
@@ -25,16 +25,38 @@ pub enum CombineBy {
     /// The nudges a linear model of the task's residuals picks (`search::residual_model`); a
     /// task whose fitness is not a sum of squared residuals cannot use it.
     Residuals,
+    /// The same model's least-squares step along every nudge, each taken as far as it helps
+    /// within `reach` (`search::least_squares`); a task without residuals cannot use it.
+    LeastSquares,
+}
+
+impl CombineBy {
+    /// Whether the rule reads the task's residuals.
+    pub fn needs_residuals(self) -> bool {
+        self != CombineBy::Fitness
+    }
+
+    /// The rule as the config writes it.
+    pub fn key(self) -> &'static str {
+        match self {
+            CombineBy::Fitness => "fitness",
+            CombineBy::Residuals => "residuals",
+            CombineBy::LeastSquares => "least_squares",
+        }
+    }
 }
 
 /// How an epoch's nudges are added up (`[search.local_search]` `combine`, `combine_by`,
 /// `combinations`, `rebase`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Combining {
-    /// Which nudges: the improving ones, or the residual model's pick.
+    /// Which nudges: the improving ones, the residual model's pick, or its least-squares step.
     pub by: CombineBy,
-    /// The genome's point limit: appended points stop there.
-    pub max_points: usize,
+    /// The genome's ranges: appended points stop at its point limit, and a least-squares step
+    /// stays in its parameter ranges.
+    pub limits: GenomeLimits,
+    /// With `LeastSquares`: how far from zero a nudge's coefficient may go.
+    pub reach: f64,
     /// How many combined designs to offer: all the improving nudges, then the fittest half, the
     /// fittest quarter, and so on. Nudges of one region often fix the same part of the error, so
     /// all of them together overshoot where fewer would not (docs/evolution.md, session 37).
@@ -115,7 +137,8 @@ pub fn combinations(
     }
     let mut offered: Vec<Genome> = Vec::new();
     for size in sizes {
-        if let Some(genome) = combine_onto(base, onto, &improving[..size], combining.max_points)
+        if let Some(genome) =
+            combine_onto(base, onto, &improving[..size], combining.limits.max_points)
             && !offered.contains(&genome)
         {
             offered.push(genome);
@@ -210,7 +233,11 @@ mod tests {
     fn combining(combinations: usize, rebase: bool) -> Combining {
         Combining {
             by: CombineBy::Fitness,
-            max_points: 10,
+            limits: GenomeLimits {
+                max_points: 10,
+                ..GenomeLimits::default()
+            },
+            reach: 1.0,
             combinations,
             rebase,
         }

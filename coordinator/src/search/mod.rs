@@ -7,6 +7,7 @@ mod diversity;
 mod fixtures;
 mod insertion;
 mod island;
+mod least_squares;
 mod migration;
 mod residual_model;
 mod resolution;

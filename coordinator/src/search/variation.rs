@@ -7,6 +7,7 @@
 //! step lives in the island and is a function of the replacements so far, so a resumed run that
 //! replays the same outcomes rebuilds it bit for bit.
 
+use amorph::genome::GenomeLimits;
 use serde::{Deserialize, Serialize};
 
 use super::combination::{CombineBy, Combining};
@@ -60,6 +61,9 @@ pub struct LocalSearchParams {
     /// or `residuals` (those a linear model of the task's residuals picks, among all of the
     /// epoch's nudges: `search::residual_model`).
     pub combine_by: CombineBy,
+    /// With `combine_by = "least_squares"`: how far from zero each nudge's coefficient may go
+    /// (1: a nudge at most taken whole or reversed).
+    pub reach: f64,
     /// With `combine`: how many combined designs an epoch offers, all the improving nudges, then
     /// the fittest half, quarter, ... (distinct ones only; 1: all of them, the session-13 rule).
     pub combinations: usize,
@@ -82,6 +86,7 @@ impl Default for LocalSearchParams {
             per_epoch: false,
             combine: false,
             combine_by: CombineBy::Fitness,
+            reach: 1.0,
             combinations: 1,
             rebase: false,
         }
@@ -90,10 +95,11 @@ impl Default for LocalSearchParams {
 
 impl LocalSearchParams {
     /// How an epoch's improving nudges are added up, or `None` without `combine`.
-    pub fn combining(&self, max_points: usize) -> Option<Combining> {
+    pub fn combining(&self, limits: &GenomeLimits) -> Option<Combining> {
         self.combine.then_some(Combining {
             by: self.combine_by,
-            max_points,
+            limits: *limits,
+            reach: self.reach,
             combinations: self.combinations,
             rebase: self.rebase,
         })
@@ -209,6 +215,10 @@ impl Default for StepAdaptation {
     }
 }
 
+/// A coefficient of a few nudges is already far outside where a voxelized design changes
+/// linearly; beyond this the model's step means nothing.
+const MAX_REACH: f64 = 8.0;
+
 /// More combined designs than this would halve the fittest nudge down to one long before.
 const MAX_COMBINATIONS: usize = 16;
 
@@ -296,6 +306,16 @@ impl Variation {
             return Err(format!(
                 "search.local_search.combinations must be between 1 and {MAX_COMBINATIONS}"
             ));
+        }
+        if !(l.reach.is_finite() && l.reach > 0.0 && l.reach <= MAX_REACH) {
+            return Err(format!(
+                "search.local_search.reach must be in (0, {MAX_REACH}]"
+            ));
+        }
+        if l.reach != 1.0 && l.combine_by != CombineBy::LeastSquares {
+            return Err(
+                "search.local_search.reach needs search.local_search.combine_by = \"least_squares\"".into(),
+            );
         }
         if l.per_epoch && !l.shared {
             return Err(

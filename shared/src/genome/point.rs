@@ -29,7 +29,7 @@ pub struct Genome {
 
 /// The ranges a genome's parameters live in; random initialisation and mutation stay inside them
 /// and [`Genome::validate`] rejects anything outside.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GenomeLimits {
     /// Lowest and highest signed density of a point.

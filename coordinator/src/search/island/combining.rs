@@ -1,7 +1,7 @@
 //! Which of an epoch's nudges an island adds up for the next epoch (`local_search.combine`):
-//! the improving ones (`search::combination`), or the residual model's pick
-//! (`search::residual_model`). Both read the epoch's children and outcomes only, so a replayed
-//! epoch offers the same designs.
+//! the improving ones (`search::combination`), the residual model's pick
+//! (`search::residual_model`), or its least-squares step (`search::least_squares`). All
+//! read the epoch's children and outcomes only, so a replayed epoch offers the same designs.
 
 use amorph::genome::Genome;
 use amorph::task::Outcome;
@@ -9,6 +9,7 @@ use tracing::info;
 
 use super::{Child, Island};
 use crate::search::combination::{CombineBy, Combining, combinations};
+use crate::search::least_squares;
 use crate::search::residual_model::{self, Measured, Nudged};
 
 impl Island {
@@ -25,6 +26,9 @@ impl Island {
                 self.combine_improving_nudges(children, outcomes, wins, combining)
             }
             CombineBy::Residuals => self.combine_by_residuals(children, outcomes, wins, combining),
+            CombineBy::LeastSquares => {
+                self.combine_by_least_squares(children, outcomes, wins, combining)
+            }
         }
     }
 
@@ -75,16 +79,81 @@ impl Island {
         wins: &[bool],
         combining: &Combining,
     ) -> Vec<Genome> {
-        let Some(slot) = (children.iter())
+        let Some(epoch) = self.measured_nudges(children, outcomes, wins, combining) else {
+            return Vec::new();
+        };
+        let (base, onto) = (epoch.base(), epoch.onto());
+        let chosen =
+            residual_model::select(&base, &onto, &epoch.nudges, combining.limits.max_points);
+        let genomes: Vec<&Genome> = chosen.iter().map(|&k| epoch.nudges[k].genome).collect();
+        let offered = combinations(base.genome, onto.genome, &genomes, combining);
+        if !offered.is_empty() {
+            info!(island = %self.id, nudges = epoch.nudges.len(), chosen = genomes.len(), offered = offered.len(), "nudges combined by their residuals");
+        }
+        offered
+    }
+
+    /// The residual model's least-squares step along this epoch's nudges
+    /// ([`least_squares::step`]), whole, then a half, a quarter, ... of its moves, up to
+    /// `combinations` distinct designs. Nothing when the base or the nudges carry no residuals or
+    /// no step lowers the predicted error.
+    fn combine_by_least_squares(
+        &self,
+        children: &[Child],
+        outcomes: &[&Outcome],
+        wins: &[bool],
+        combining: &Combining,
+    ) -> Vec<Genome> {
+        let Some(epoch) = self.measured_nudges(children, outcomes, wins, combining) else {
+            return Vec::new();
+        };
+        let (base, onto) = (epoch.base(), epoch.onto());
+        let limits = &combining.limits;
+        let Some(step) = least_squares::step(
+            &base,
+            &onto,
+            &epoch.nudges,
+            combining.reach,
+            limits.max_points,
+        ) else {
+            return Vec::new();
+        };
+        let mut offered: Vec<Genome> = Vec::new();
+        let mut scale = 1.0;
+        for _ in 0..combining.combinations {
+            if let Some(design) = least_squares::apply(
+                base.genome,
+                onto.genome,
+                &epoch.nudges,
+                &step,
+                scale,
+                limits,
+            ) && !offered.contains(&design)
+            {
+                offered.push(design);
+            }
+            scale /= 2.0;
+        }
+        info!(island = %self.id, nudges = epoch.nudges.len(), predicted = step.predicted, offered = offered.len(), "nudges combined by a least-squares step");
+        offered
+    }
+
+    /// This epoch's nudges of one slot with their residuals lined up with the base's, and what
+    /// the model builds on: the base, or (rebased) the slot's occupant after the epoch, whose own
+    /// residuals are measured (the winning nudge, or last epoch's combination). `None` when the
+    /// base or that occupant carries no residuals.
+    fn measured_nudges<'a>(
+        &'a self,
+        children: &'a [Child],
+        outcomes: &[&'a Outcome],
+        wins: &[bool],
+        combining: &Combining,
+    ) -> Option<MeasuredNudges<'a>> {
+        let slot = (children.iter())
             .find(|c| c.nudge && !c.combined)
-            .map(|c| c.dominant_parent)
-        else {
-            return Vec::new();
-        };
+            .map(|c| c.dominant_parent)?;
         let base = &self.population[slot];
-        let Some(base_residuals) = base.outcome.metrics().and_then(|m| m.residuals()) else {
-            return Vec::new();
-        };
+        let base_residuals = base.outcome.metrics().and_then(|m| m.residuals())?;
         let nudges: Vec<Nudged> = (children.iter().zip(outcomes))
             .filter(|(c, _)| c.nudge && !c.combined && c.dominant_parent == slot)
             .filter_map(|(c, o)| {
@@ -95,37 +164,46 @@ impl Island {
                 })
             })
             .collect();
-        let values: Vec<f64> = base_residuals.iter().map(|r| r[1]).collect();
-        let base_measured = Measured {
-            genome: &base.genome,
-            residuals: &values,
-        };
-        // Rebased, the prediction starts from the slot's occupant after the epoch, whose own
-        // residuals are measured: the winning nudge, or last epoch's combination.
-        let onto_values: Vec<f64>;
         let onto = match last_winner(children, wins, slot) {
             Some(k) if combining.rebase => {
-                let Some(residuals) = (outcomes[k].metrics())
+                let residuals = (outcomes[k].metrics())
                     .and_then(|m| m.residuals())
-                    .and_then(|r| residual_model::aligned(&base_residuals, &r))
-                else {
-                    return Vec::new();
-                };
-                onto_values = residuals;
-                Measured {
-                    genome: &children[k].genome,
-                    residuals: &onto_values,
-                }
+                    .and_then(|r| residual_model::aligned(&base_residuals, &r))?;
+                Some((&children[k].genome, residuals))
             }
-            _ => base_measured,
+            _ => None,
         };
-        let chosen = residual_model::select(&base_measured, &onto, &nudges, combining.max_points);
-        let genomes: Vec<&Genome> = chosen.iter().map(|&k| nudges[k].genome).collect();
-        let offered = combinations(&base.genome, onto.genome, &genomes, combining);
-        if !offered.is_empty() {
-            info!(island = %self.id, nudges = nudges.len(), chosen = genomes.len(), offered = offered.len(), "nudges combined by their residuals");
+        Some(MeasuredNudges {
+            base: &base.genome,
+            base_residuals: base_residuals.iter().map(|r| r[1]).collect(),
+            onto,
+            nudges,
+        })
+    }
+}
+
+/// An epoch's nudges as the residual model reads them ([`Island::measured_nudges`]).
+struct MeasuredNudges<'a> {
+    base: &'a Genome,
+    base_residuals: Vec<f64>,
+    /// The rebased design and its residuals; `None`: the base itself.
+    onto: Option<(&'a Genome, Vec<f64>)>,
+    nudges: Vec<Nudged<'a>>,
+}
+
+impl MeasuredNudges<'_> {
+    fn base(&self) -> Measured<'_> {
+        Measured {
+            genome: self.base,
+            residuals: &self.base_residuals,
         }
-        offered
+    }
+
+    fn onto(&self) -> Measured<'_> {
+        match &self.onto {
+            Some((genome, residuals)) => Measured { genome, residuals },
+            None => self.base(),
+        }
     }
 }
 

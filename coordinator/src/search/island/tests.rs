@@ -236,7 +236,16 @@ fn improving_nudges_return_added_up_as_the_next_epochs_first_nudge() {
     });
     let (children, outcomes) = epoch();
     assert_eq!(
-        isl.apply(children, outcomes, b.variation.local_search.combining(64)),
+        isl.apply(
+            children,
+            outcomes,
+            b.variation
+                .local_search
+                .combining(&amorph::genome::GenomeLimits {
+                    max_points: 64,
+                    ..Default::default()
+                })
+        ),
         1
     );
     let next = isl.breed(3, &b, DIMS, None);

@@ -146,6 +146,19 @@ fn each_bad_field_is_named() {
     assert!(v.validate().unwrap_err().contains("combine_by"));
     v.local_search.combine = true;
     assert!(v.validate().is_ok());
+    // `reach` is the least-squares step's, and a coefficient stays within a few nudges.
+    v.local_search.reach = 2.0;
+    assert!(v.validate().unwrap_err().contains("reach needs"));
+    v.local_search.combine_by = crate::search::CombineBy::LeastSquares;
+    assert!(v.validate().is_ok());
+    for bad in [0.0, -1.0, 9.0, f64::NAN, f64::INFINITY] {
+        v.local_search.reach = bad;
+        assert!(
+            v.validate()
+                .unwrap_err()
+                .contains("search.local_search.reach must be")
+        );
+    }
     v = Variation::default();
     v.local_search.fraction = f64::NAN;
     assert!(
