@@ -35,12 +35,29 @@ pub fn failed() -> Outcome {
 
 /// A genome of one point at `x` along the first axis (so genome distance is |x - x'|).
 pub fn point_at(x: f64) -> Genome {
-    Genome::new(vec![GaussianPoint {
-        position: [x, 0.5, 0.5],
-        density: 0.5,
-        falloff: 0.1,
-        material: MaterialId(0),
-    }])
+    points_at(&[x])
+}
+
+/// A genome of one point at each of `xs` along the first axis, each of density 0.5 and falloff
+/// 0.1.
+pub fn points_at(xs: &[f64]) -> Genome {
+    Genome::new(
+        (xs.iter())
+            .map(|&x| GaussianPoint {
+                position: [x, 0.5, 0.5],
+                density: 0.5,
+                falloff: 0.1,
+                material: MaterialId(0),
+            })
+            .collect(),
+    )
+}
+
+/// `base` with point `i` moved by `dx` along the first axis: a nudge of one point.
+pub fn moved(base: &Genome, i: usize, dx: f64) -> Genome {
+    let mut g = base.clone();
+    g.points[i].position[0] += dx;
+    g
 }
 
 /// An island whose slot i holds a one-point genome at `xs[i]` scored `fitness[i]`, with task ids

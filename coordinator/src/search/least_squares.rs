@@ -219,27 +219,7 @@ fn clamp(p: &mut GaussianPoint, limits: &GenomeLimits) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use amorph::material::MaterialId;
-
-    fn genome(xs: &[f64]) -> Genome {
-        Genome {
-            points: (xs.iter())
-                .map(|&x| GaussianPoint {
-                    position: [x, 0.5, 0.5],
-                    density: 0.5,
-                    falloff: 0.1,
-                    material: MaterialId(0),
-                })
-                .collect(),
-        }
-    }
-
-    /// The base with point `i` moved along x by `dx`.
-    fn moved(base: &Genome, i: usize, dx: f64) -> Genome {
-        let mut g = base.clone();
-        g.points[i].position[0] += dx;
-        g
-    }
+    use crate::search::fixtures::{moved, points_at as genome};
 
     /// Two non-orthogonal directions spanning the plane: the unconstrained minimum solves the
     /// normal equations exactly (here r + 1·d0 − 2·d1 = 0).

@@ -134,20 +134,7 @@ pub fn select(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use amorph::material::MaterialId;
-
-    fn genome(xs: &[f64]) -> Genome {
-        Genome {
-            points: (xs.iter())
-                .map(|&x| GaussianPoint {
-                    position: [x, 0.5, 0.5],
-                    density: 1.0,
-                    falloff: 0.1,
-                    material: MaterialId(0),
-                })
-                .collect(),
-        }
-    }
+    use crate::search::fixtures::points_at as genome;
 
     /// The selection onto the base itself.
     fn on_base(
@@ -165,9 +152,7 @@ mod tests {
 
     /// The base with point `i` moved.
     fn moved(base: &Genome, i: usize) -> Genome {
-        let mut g = base.clone();
-        g.points[i].position[0] += 0.01;
-        g
+        crate::search::fixtures::moved(base, i, 0.01)
     }
 
     /// Nudges whose directions are orthogonal and each fix part of the error: the model takes

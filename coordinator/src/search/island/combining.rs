@@ -21,14 +21,16 @@ impl Island {
         wins: &[bool],
         combining: &Combining,
     ) -> Vec<Genome> {
+        if combining.by == CombineBy::Fitness {
+            return self.combine_improving_nudges(children, outcomes, wins, combining);
+        }
+        // Both residual rules read the epoch the same way; nothing without residuals.
+        let Some(epoch) = self.measured_nudges(children, outcomes, wins, combining) else {
+            return Vec::new();
+        };
         match combining.by {
-            CombineBy::Fitness => {
-                self.combine_improving_nudges(children, outcomes, wins, combining)
-            }
-            CombineBy::Residuals => self.combine_by_residuals(children, outcomes, wins, combining),
-            CombineBy::LeastSquares => {
-                self.combine_by_least_squares(children, outcomes, wins, combining)
-            }
+            CombineBy::LeastSquares => self.combine_by_least_squares(&epoch, combining),
+            _ => self.combine_by_residuals(&epoch, combining),
         }
     }
 
@@ -71,17 +73,8 @@ impl Island {
 
     /// The nudges of this epoch (improving or not, their residuals lined up with their base's)
     /// that the residual model picks ([`residual_model::select`]), added up in the order it
-    /// picked them by [`combinations`]. Nothing when the base or the nudges carry no residuals.
-    fn combine_by_residuals(
-        &self,
-        children: &[Child],
-        outcomes: &[&Outcome],
-        wins: &[bool],
-        combining: &Combining,
-    ) -> Vec<Genome> {
-        let Some(epoch) = self.measured_nudges(children, outcomes, wins, combining) else {
-            return Vec::new();
-        };
+    /// picked them by [`combinations`].
+    fn combine_by_residuals(&self, epoch: &MeasuredNudges, combining: &Combining) -> Vec<Genome> {
         let (base, onto) = (epoch.base(), epoch.onto());
         let chosen =
             residual_model::select(&base, &onto, &epoch.nudges, combining.limits.max_points);
@@ -95,18 +88,12 @@ impl Island {
 
     /// The residual model's least-squares step along this epoch's nudges
     /// ([`least_squares::step`]), whole, then a half, a quarter, ... of its moves, up to
-    /// `combinations` distinct designs. Nothing when the base or the nudges carry no residuals or
-    /// no step lowers the predicted error.
+    /// `combinations` distinct designs. Nothing when no step lowers the predicted error.
     fn combine_by_least_squares(
         &self,
-        children: &[Child],
-        outcomes: &[&Outcome],
-        wins: &[bool],
+        epoch: &MeasuredNudges,
         combining: &Combining,
     ) -> Vec<Genome> {
-        let Some(epoch) = self.measured_nudges(children, outcomes, wins, combining) else {
-            return Vec::new();
-        };
         let (base, onto) = (epoch.base(), epoch.onto());
         let limits = &combining.limits;
         let Some(step) = least_squares::step(
