@@ -15,7 +15,7 @@
 
 use amorph::genome::{GaussianPoint, Genome, GenomeLimits};
 
-use crate::search::residual_model::{Measured, Nudged};
+use crate::search::residual_model::{Measured, Nudged, changes, squared};
 
 /// A step: each nudge's coefficient (0 for a nudge left out; 0 or 1 for an insertion) and the
 /// sum of squares the model predicts for it.
@@ -67,13 +67,8 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// What a nudge changed of `base`: whether it appended points (an insertion, taken whole), or
 /// `None` when it has fewer points or changes nothing.
 fn appends(base: &Genome, nudge: &Genome) -> Option<bool> {
-    let n = base.points.len();
-    let changed = nudge.points.len() > n
-        || (nudge.points[..n.min(nudge.points.len())])
-            .iter()
-            .zip(&base.points)
-            .any(|(a, b)| a != b);
-    (nudge.points.len() >= n && changed).then_some(nudge.points.len() > n)
+    let (moved, appended) = changes(base, nudge)?;
+    (!moved.is_empty() || !appended.is_empty()).then_some(!appended.is_empty())
 }
 
 /// The model's step from `onto` (`base`, or a design that descends from it) along the nudges
@@ -156,8 +151,8 @@ pub fn step(
             *p += c * x;
         }
     }
-    let predicted: f64 = predicted.iter().map(|r| r * r).sum();
-    let onto_error: f64 = onto.residuals.iter().map(|r| r * r).sum();
+    let predicted = squared(predicted.into_iter());
+    let onto_error = squared(onto.residuals.iter().copied());
     (predicted < onto_error).then_some(Step {
         coefficients: c,
         predicted,

@@ -35,7 +35,10 @@ pub fn aligned(base: &[[f64; 2]], nudge: &[[f64; 2]]) -> Option<Vec<f64>> {
 
 /// What a nudge changes of `base`: the indices of the points it moved and the points it
 /// appended, or `None` when it has fewer points (it is not a nudge of `base`).
-fn changes<'a>(base: &Genome, nudge: &'a Genome) -> Option<(Vec<usize>, &'a [GaussianPoint])> {
+pub(super) fn changes<'a>(
+    base: &Genome,
+    nudge: &'a Genome,
+) -> Option<(Vec<usize>, &'a [GaussianPoint])> {
     let n = base.points.len();
     if nudge.points.len() < n {
         return None;
@@ -46,7 +49,7 @@ fn changes<'a>(base: &Genome, nudge: &'a Genome) -> Option<(Vec<usize>, &'a [Gau
     Some((moved, &nudge.points[n..]))
 }
 
-fn squared(residuals: impl Iterator<Item = f64>) -> f64 {
+pub(super) fn squared(residuals: impl Iterator<Item = f64>) -> f64 {
     residuals.map(|r| r * r).sum()
 }
 
