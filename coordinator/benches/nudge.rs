@@ -1,7 +1,8 @@
 //! Local-search nudges from a plateaued design (issue 13), figures in docs/evolution.md.
 //!
 //! `cargo bench -p amorph-coordinator --bench nudge -- <design.json> <config.toml> <evaluations>
-//! <points>,<probability>,<step>[,<insertion>] [...]`: for each nudge setting, a (1+1) climb from the design in
+//! <points>,<probability>,<step>[,<insertion>[,flip_model]] [...]`: for each nudge setting (a last
+//! `flip_model` draws the insertions by the task's flip model, `local_search.insertion_by`), a (1+1) climb from the design in
 //! `design.json` (a `best_genome.json` or a test fixture: genome and resolution) under the scene
 //! of `config.toml`, evaluating one nudge at a time and keeping it only if strictly fitter, as
 //! crowding keeps a nudge of the best. Prints, per setting, the improvements, the nudges that left
@@ -21,7 +22,7 @@ use amorph::genome::Genome;
 use amorph::task::Outcome;
 use amorph::task::{Scene, Task};
 use amorph::voxel::VoxelGrid;
-use amorph_coordinator::search::{BoundarySite, LocalSearchParams, other_state};
+use amorph_coordinator::search::{InsertionBy, LocalSearchParams, other_state};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -46,7 +47,12 @@ fn main() {
             );
             continue;
         }
-        let v: Vec<f64> = setting
+        // A last word `flip_model` draws the insertions by the task's flip model.
+        let (numbers, by) = match setting.strip_suffix(",flip_model") {
+            Some(numbers) => (numbers, InsertionBy::FlipModel),
+            None => (setting.as_str(), InsertionBy::Random),
+        };
+        let v: Vec<f64> = numbers
             .split(',')
             .map(|s| s.parse().expect("a number"))
             .collect();
@@ -56,14 +62,14 @@ fn main() {
             probability: v[1],
             step: v[2],
             insertion: v.get(3).copied().unwrap_or(0.0),
+            insertion_by: by,
             ..Default::default()
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let (mut best, mut best_outcome) = (genome.clone(), start.clone());
         let mut best_design = scene.design(&best, dims);
-        let site_of =
-            |g: &Genome| (local.insertion > 0.0).then(|| BoundarySite::new(g, scene, dims));
-        let mut site = site_of(&best);
+        let site_of = |g: &Genome, o: &Outcome| local.boundary_site(g, o, scene, dims);
+        let mut site = site_of(&best, &best_outcome);
         let (mut improved, mut unchanged) = (0, 0);
         for _ in 0..evaluations {
             let mut child = best.clone();
@@ -75,17 +81,18 @@ fn main() {
             }
             let outcome = scene.evaluate(&child, dims);
             if outcome.is_fitter_than(&best_outcome) {
-                site = site_of(&child);
+                site = site_of(&child, &outcome);
                 (best, best_outcome, best_design) = (child, outcome, design);
                 improved += 1;
             }
         }
         println!(
-            "points {} probability {} step {} insertion {}: {evaluations} nudges, {improved} improved, {unchanged} left the design unchanged; figure {:.4} -> {:.4}",
+            "points {} probability {} step {} insertion {} by {}: {evaluations} nudges, {improved} improved, {unchanged} left the design unchanged; figure {:.4} -> {:.4}",
             local.points,
             local.probability,
             local.step,
             local.insertion,
+            local.insertion_by.key(),
             figure(&start),
             figure(&best_outcome)
         );

@@ -279,6 +279,14 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
             raw.scene.kind()
         ));
     }
+    let insertion_by = variation.local_search.insertion_by;
+    if insertion_by != crate::search::InsertionBy::Random && !raw.scene.has_flip_model() {
+        return Err(format!(
+            "search.local_search.insertion_by = \"{}\": a {} scene has no model of single-voxel changes",
+            insertion_by.key(),
+            raw.scene.kind()
+        ));
+    }
     let b = &raw.budget;
     if b.evaluations.is_none() && b.wall_seconds.is_none() && b.target_rms_percent.is_none() {
         return Err(

@@ -175,6 +175,33 @@ fn a_least_squares_step_is_bit_identical_on_threads_and_resume() {
     );
 }
 
+/// Insertions drawn by the beam's flip model (`insertion_by = "flip_model"`, session 45): the
+/// guide is built from the best's stored outcome, so the run is the same on 1 and 3 threads and
+/// across a resume, and another run than uniform insertions; `insertion_by = "random"` written
+/// out is the uniform run to the bit.
+#[test]
+fn insertions_drawn_by_the_flip_model_are_bit_identical_on_threads_and_resume() {
+    assert_a_climb_key(
+        "flip-model",
+        "insertion = 0.5\nshared = true\ncombine = true",
+        "insertion_by = \"flip_model\"",
+        "insertion_by = \"random\"",
+    );
+}
+
+/// The flip model's steps (`model_steps`, session 45): the sequence is rebuilt from the best's
+/// stored outcome, so the run is the same on 1 and 3 threads and across a resume, and another run
+/// than guided insertions alone; `model_steps = 0` written out is that run to the bit.
+#[test]
+fn model_steps_are_bit_identical_on_threads_and_resume() {
+    assert_a_climb_key(
+        "model-steps",
+        "insertion = 0.5\nshared = true\ncombine = true\ninsertion_by = \"flip_model\"",
+        "model_steps = 3",
+        "model_steps = 0",
+    );
+}
+
 #[test]
 fn new_operators_are_bit_identical_on_1_and_3_threads_and_keep_their_bounds() {
     let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];

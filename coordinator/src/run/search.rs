@@ -21,8 +21,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
-    BoundarySite, Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest,
-    SplitWatch, first_in_turn, keep_at_least_one, migrate,
+    Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest, SplitWatch,
+    first_in_turn, keep_at_least_one, migrate,
 };
 use crate::store::{MigrationRecord, Purpose, StoredEvaluation};
 use crate::summary::fittest;
@@ -289,10 +289,19 @@ impl Search {
                 })
                 .expect("a run has islands");
             let slot = self.islands[holder].best_index();
-            let genome = self.islands[holder].population[slot].genome.clone();
-            let site =
-                (local.insertion > 0.0).then(|| BoundarySite::new(&genome, &breeding.scene, dims));
-            (holder, SharedBest { genome, slot, site })
+            let best = &self.islands[holder].population[slot];
+            let genome = best.genome.clone();
+            let site = local.boundary_site(&genome, &best.outcome, &breeding.scene, dims);
+            let holder_id = self.islands[holder].id;
+            (
+                holder,
+                SharedBest {
+                    genome,
+                    slot,
+                    site,
+                    holder: holder_id,
+                },
+            )
         });
         // Skipping unchanged children, every island breeds its whole share and the budget cuts
         // the children left after the skip (`drop_unchanged`): what an epoch breeds then never

@@ -48,6 +48,8 @@ pub struct SharedBest {
     pub genome: Genome,
     pub slot: usize,
     pub site: Option<BoundarySite>,
+    /// The island that holds it, which alone breeds its model steps (`local_search.model_steps`).
+    pub holder: IslandId,
 }
 
 /// How an island breeds (shared by all islands of a run).
@@ -162,10 +164,17 @@ impl Island {
             Some(shared) => shared,
             None => {
                 let slot = self.best_index();
-                let genome = self.population[slot].genome.clone();
-                let site = (nudges > 0 && local.insertion > 0.0)
-                    .then(|| BoundarySite::new(&genome, &breeding.scene, dims));
-                own = SharedBest { genome, slot, site };
+                let best = &self.population[slot];
+                let genome = best.genome.clone();
+                let site = (nudges > 0)
+                    .then(|| local.boundary_site(&genome, &best.outcome, &breeding.scene, dims))
+                    .flatten();
+                own = SharedBest {
+                    genome,
+                    slot,
+                    site,
+                    holder: self.id,
+                };
                 &own
             }
         };
@@ -182,7 +191,23 @@ impl Island {
                 combined: true,
             });
         }
-        for _ in offered..nudges {
+        // The model's steps replace the first plain nudges, bred once, by the holding island.
+        let steps = match &from.site {
+            Some(site) if from.holder == self.id && local.model_steps > 0 => {
+                site.model_step_children(&from.genome, &breeding.scene, local.model_steps)
+            }
+            _ => Vec::new(),
+        };
+        let stepped = steps.len().min(nudges - offered);
+        for genome in steps.into_iter().take(stepped) {
+            children.push(Child {
+                genome,
+                dominant_parent: from.slot,
+                nudge: true,
+                combined: false,
+            });
+        }
+        for _ in offered + stepped..nudges {
             let mut genome = from.genome.clone();
             local.step_from_best(
                 &mut genome,

@@ -11,7 +11,7 @@ use amorph::genome::GenomeLimits;
 use serde::{Deserialize, Serialize};
 
 use super::combination::{CombineBy, Combining};
-use super::insertion::BoundarySite;
+use super::insertion::{BoundarySite, InsertionBy, MAX_MODEL_STEPS};
 
 /// A (1+λ) evolution strategy inside crowding: some children of every epoch are the island's best
 /// design with its continuous parameters nudged (no crossover, no material change, no point added
@@ -42,6 +42,15 @@ pub struct LocalSearchParams {
     /// Share of the nudges that instead add one narrow point at a random voxel on the best's
     /// design boundary, giving that voxel another state (see `search::insertion`).
     pub insertion: f64,
+    /// Where insertions go: `random` (a uniformly random boundary voxel and other state) or
+    /// `flip_model` (a boundary change drawn by the gain the task's model of single-voxel changes
+    /// predicts from the best's measured outcome; beams only).
+    pub insertion_by: InsertionBy,
+    /// With `insertion_by = "flip_model"`: how many of each epoch's nudges are the model's steps
+    /// instead, the best with the first 1, 2, 4, ... changes of the flip model's greedy sequence
+    /// of boundary changes appended (0: none, at most 8). The model adds up single-voxel changes
+    /// knowing what each one before it fixed, where the improving nudges' combination cannot.
+    pub model_steps: usize,
     /// Every island's nudges start from the run's best (in the island that holds it, which judges
     /// them) instead of the island's own best: one climb fed by all islands rather than one short
     /// climb per island. Crossover children stay in their islands.
@@ -82,6 +91,8 @@ impl Default for LocalSearchParams {
             step: 0.02,
             step_spread: 0.0,
             insertion: 0.0,
+            insertion_by: InsertionBy::Random,
+            model_steps: 0,
             shared: false,
             per_epoch: false,
             combine: false,
@@ -142,6 +153,30 @@ impl LocalSearchParams {
             }
         }
         nudges
+    }
+
+    /// Where the insertions of nudges from `genome` (evaluated to `outcome` at `dims`) go, or
+    /// `None` when insertion is off.
+    pub fn boundary_site(
+        &self,
+        genome: &amorph::genome::Genome,
+        outcome: &amorph::task::Outcome,
+        scene: &amorph::task::Scene,
+        dims: amorph::voxel::GridDims,
+    ) -> Option<BoundarySite> {
+        (self.insertion > 0.0).then(|| {
+            let site = BoundarySite::new(genome, scene, dims);
+            match self.insertion_by {
+                InsertionBy::Random => site,
+                InsertionBy::FlipModel if self.model_steps == 0 => site.guided_by(scene, outcome),
+                InsertionBy::FlipModel => site.guided_by(scene, outcome).with_model_step(
+                    genome,
+                    scene,
+                    outcome,
+                    1 << (self.model_steps - 1),
+                ),
+            }
+        })
     }
 
     /// Moves `genome`, a copy of the island's best, as configured: with probability `insertion`
@@ -316,6 +351,22 @@ impl Variation {
             return Err(
                 "search.local_search.reach needs search.local_search.combine_by = \"least_squares\"".into(),
             );
+        }
+        if l.insertion_by != InsertionBy::Random && l.insertion == 0.0 {
+            return Err(format!(
+                "search.local_search.insertion_by = \"{}\" needs search.local_search.insertion > 0",
+                l.insertion_by.key()
+            ));
+        }
+        if l.model_steps > 0 && l.insertion_by != InsertionBy::FlipModel {
+            return Err(
+                "search.local_search.model_steps needs search.local_search.insertion_by = \"flip_model\"".into(),
+            );
+        }
+        if l.model_steps > MAX_MODEL_STEPS {
+            return Err(format!(
+                "search.local_search.model_steps must be at most {MAX_MODEL_STEPS}"
+            ));
         }
         if l.per_epoch && !l.shared {
             return Err(

@@ -11,6 +11,7 @@
 pub mod beam;
 pub mod cantilever;
 mod error;
+mod flip_model;
 mod kindless;
 pub mod locomotion;
 pub mod memory;
@@ -24,6 +25,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 pub use error::SceneError;
+pub use flip_model::FlipModel;
 
 use crate::dynamics::DynamicScene;
 use crate::export::Block;
@@ -90,6 +92,8 @@ pub trait Task {
     const BYTES_PER_VOXEL: u64;
     /// Whether the fitness is minus a sum of squared residuals that [`Task::residuals`] gives.
     const HAS_RESIDUALS: bool = false;
+    /// Whether [`Task::flip_model`] gives a model.
+    const HAS_FLIP_MODEL: bool = false;
 
     /// Checks every field, naming the first bad one.
     fn validate(&self) -> Result<(), SceneError>;
@@ -127,6 +131,15 @@ pub trait Task {
     /// residuals of a small change add up where fitnesses do not. `None` unless
     /// [`Task::HAS_RESIDUALS`].
     fn residuals(_metrics: &Self::Metrics) -> Option<Vec<[f64; 2]>> {
+        None
+    }
+    /// How single-voxel changes of `design` (kept, evaluated to `metrics`) are expected to move
+    /// the fitness; `None` unless [`Task::HAS_FLIP_MODEL`], or where the model cannot be built.
+    fn flip_model<'a>(
+        &'a self,
+        _design: &'a VoxelGrid,
+        _metrics: &'a Self::Metrics,
+    ) -> Option<Box<dyn FlipModel + 'a>> {
         None
     }
     /// One line for progress and logs.
@@ -322,6 +335,21 @@ macro_rules! tasks {
             /// Whether the task's fitness is a sum of squared residuals ([`Task::residuals`]).
             pub fn has_residuals(&self) -> bool {
                 match self { $(Scene::$variant(_) => <$scene as Task>::HAS_RESIDUALS),+ }
+            }
+
+            /// Whether the task models single-voxel changes ([`Task::flip_model`]).
+            pub fn has_flip_model(&self) -> bool {
+                match self { $(Scene::$variant(_) => <$scene as Task>::HAS_FLIP_MODEL),+ }
+            }
+
+            /// The task's model of single-voxel changes to `design`, evaluated to `outcome`
+            /// (`None` for a failure, another task's metrics, or a task without one).
+            pub fn flip_model<'a>(&'a self, design: &'a VoxelGrid, outcome: &'a Outcome) -> Option<Box<dyn FlipModel + 'a>> {
+                match (self, outcome.metrics()?) {
+                    $((Scene::$variant(s), Metrics::$variant(m)) => s.flip_model(design, m),)+
+                    #[allow(unreachable_patterns)]
+                    _ => None,
+                }
             }
 
             /// Whether the task has a stop target (`budget.target_rms_percent`).

@@ -134,6 +134,7 @@ fn shared_nudges_start_from_the_run_best_not_the_island_best() {
         genome: run_best.clone(),
         slot: 7,
         site: None,
+        holder: IslandId(9),
     };
     let children = isl.breed(4, &b, DIMS, Some(&shared));
     for c in &children[..2] {

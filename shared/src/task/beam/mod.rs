@@ -2,6 +2,7 @@
 
 mod custom;
 mod evaluate;
+mod flip_model;
 mod report;
 mod scene;
 mod target;
@@ -10,11 +11,14 @@ use std::path::Path;
 
 pub use custom::{CustomProfile, Interpolation, MAX_PROFILE_POINTS, TargetError};
 pub use evaluate::simulate_beam;
+pub use flip_model::BeamFlipModel;
 pub use scene::{BeamMetrics, BeamScene};
 pub use target::{NamedProfile, TargetProfile};
 
 use super::cantilever::check_cantilever_dims;
-use super::{Artefact, Figure, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome};
+use super::{
+    Artefact, Figure, FlipModel, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome,
+};
 use crate::dynamics::DynamicScene;
 use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
@@ -31,6 +35,7 @@ impl Task for BeamScene {
     };
     const HAS_TARGET: bool = true;
     const HAS_RESIDUALS: bool = true;
+    const HAS_FLIP_MODEL: bool = true;
     /// The static solve held 11.2 kB per voxel from 12x48x12 to 32x96x32.
     const BYTES_PER_VOXEL: u64 = 16 << 10;
 
@@ -96,6 +101,14 @@ impl Task for BeamScene {
                 .map(|&[t, w, target]| [t, w - target])
                 .collect(),
         )
+    }
+
+    fn flip_model<'a>(
+        &'a self,
+        design: &'a VoxelGrid,
+        metrics: &'a BeamMetrics,
+    ) -> Option<Box<dyn FlipModel + 'a>> {
+        BeamFlipModel::new(self, design, metrics).map(|m| Box::new(m) as Box<dyn FlipModel>)
     }
 
     fn headline(&self, m: &BeamMetrics) -> String {
