@@ -210,31 +210,13 @@ fn combining_by_residuals_needs_a_least_squares_task() {
         let keys = format!(
             "[search.local_search]\nfraction = 0.5\ncombine = true\ncombine_by = \"{by}\"\n"
         );
-        let beam = MINIMAL.replace("[budget]", &format!("{keys}[budget]"));
-        RunConfig::parse(&beam, Path::new("t.toml")).unwrap();
-        let robot = format!(
-            "name = \"t\"\n{keys}[budget]\nevaluations = 100\n[resolution]\nlevels = [[6, 6, 6]]\n\
-             [scene]\nkind = \"locomotion\"\n"
-        );
-        let err = RunConfig::parse(&robot, Path::new("t.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.contains("search.local_search.combine_by")
-                && err.contains(by)
-                && err.contains("locomotion"),
-            "{err}"
-        );
+        assert_beam_only(&keys, "search.local_search.combine_by", by);
     }
 }
 
-/// Insertions drawn by a flip model need a task that has one and insertions to draw: a beam takes
-/// the key, a robot's config is refused naming the key, its value and the scene's kind, and the
-/// key without `insertion` is refused naming both keys.
-#[test]
-fn insertions_by_a_flip_model_need_a_model_and_insertions() {
-    let keys =
-        "[search.local_search]\nfraction = 0.5\ninsertion = 0.5\ninsertion_by = \"flip_model\"\n";
+/// `keys` (a `[search.local_search]` table) are taken in a beam's config, and a robot's config
+/// with them is refused naming `key`, its `value` and the scene's kind.
+fn assert_beam_only(keys: &str, key: &str, value: &str) {
     let beam = MINIMAL.replace("[budget]", &format!("{keys}[budget]"));
     RunConfig::parse(&beam, Path::new("t.toml")).unwrap();
     let robot = format!(
@@ -245,11 +227,19 @@ fn insertions_by_a_flip_model_need_a_model_and_insertions() {
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("search.local_search.insertion_by")
-            && err.contains("flip_model")
-            && err.contains("locomotion"),
+        err.contains(key) && err.contains(value) && err.contains("locomotion"),
         "{err}"
     );
+}
+
+/// Insertions drawn by a flip model need a task that has one and insertions to draw: a beam takes
+/// the key, a robot's config is refused naming the key, its value and the scene's kind, and the
+/// key without `insertion` is refused naming both keys.
+#[test]
+fn insertions_by_a_flip_model_need_a_model_and_insertions() {
+    let keys =
+        "[search.local_search]\nfraction = 0.5\ninsertion = 0.5\ninsertion_by = \"flip_model\"\n";
+    assert_beam_only(keys, "search.local_search.insertion_by", "flip_model");
     let without = MINIMAL.replace(
         "[budget]",
         "[search.local_search]\nfraction = 0.5\ninsertion_by = \"flip_model\"\n[budget]",
