@@ -24,7 +24,7 @@ pub enum InsertionBy {
     #[default]
     Random,
     /// A boundary change drawn by the gain the task's flip model predicts for it (a beam's
-    /// layered cantilever, `amorph::task::beam::BeamFlipModel`); a task without one cannot use it.
+    /// linked cantilever, `amorph::task::beam::BeamFlipModel`); a task without one cannot use it.
     FlipModel,
 }
 
@@ -114,15 +114,7 @@ impl BoundarySite {
         let Some(mut model) = scene.flip_model(&self.design, outcome) else {
             return self;
         };
-        let materials = scene.palette().len();
-        let mut candidates: Vec<(usize, Option<MaterialId>)> = (self.boundary.iter())
-            .flat_map(|&cell| {
-                let current = self.design.cells()[cell];
-                states(materials)
-                    .filter(move |&s| s != current)
-                    .map(move |s| (cell, s))
-            })
-            .collect();
+        let mut candidates: Vec<(usize, Option<MaterialId>)> = self.changes(scene).collect();
         let mut sequence = Vec::new();
         while sequence.len() < limit.min(room) {
             // The first of equal gains wins, so the sequence is a function of the design alone.
@@ -137,7 +129,7 @@ impl BoundarySite {
             let (cell, to) = candidates[k];
             candidates.remove(k);
             // A change no narrow point can make (its density out of range) is passed over.
-            if self.place(&mut genome.clone(), cell, to, scene).is_none() {
+            if self.point_for(cell, to, scene).is_none() {
                 continue;
             }
             model.take(cell, to);
@@ -161,22 +153,32 @@ impl BoundarySite {
 
     fn guide(&self, scene: &Scene, outcome: &amorph::task::Outcome) -> Option<Guide> {
         let model = scene.flip_model(&self.design, outcome)?;
-        let materials = scene.palette().len();
         let (mut changes, mut cumulative, mut total) = (Vec::new(), Vec::new(), 0.0);
-        for &cell in &self.boundary {
-            let current = self.design.cells()[cell];
-            for to in states(materials).filter(|&s| s != current) {
-                let gain = model.gain(cell, to);
-                if gain.is_finite() && gain > 0.0 {
-                    total += gain;
-                    changes.push((cell, to));
-                    cumulative.push(total);
-                }
+        for (cell, to) in self.changes(scene) {
+            let gain = model.gain(cell, to);
+            if gain.is_finite() && gain > 0.0 {
+                total += gain;
+                changes.push((cell, to));
+                cumulative.push(total);
             }
         }
         (!changes.is_empty()).then_some(Guide {
             changes,
             cumulative,
+        })
+    }
+
+    /// Every change of one boundary voxel to another state, in cell order, then state order.
+    fn changes<'a>(
+        &'a self,
+        scene: &Scene,
+    ) -> impl Iterator<Item = (usize, Option<MaterialId>)> + 'a {
+        let materials = scene.palette().len();
+        self.boundary.iter().flat_map(move |&cell| {
+            let current = self.design.cells()[cell];
+            states(materials)
+                .filter(move |&s| s != current)
+                .map(move |s| (cell, s))
         })
     }
 
@@ -222,6 +224,18 @@ impl BoundarySite {
         target: Option<MaterialId>,
         scene: &Scene,
     ) -> Option<()> {
+        genome.points.push(self.point_for(cell, target, scene)?);
+        Some(())
+    }
+
+    /// The narrow point that gives `cell` the state `target` (from the fields of this site's
+    /// genome), or `None` when the density that needs is outside the genome's limits.
+    fn point_for(
+        &self,
+        cell: usize,
+        target: Option<MaterialId>,
+        scene: &Scene,
+    ) -> Option<GaussianPoint> {
         let limits = scene.limits();
         let dims = self.design.dims();
         let materials = scene.palette().len();
@@ -252,13 +266,12 @@ impl BoundarySite {
             return None;
         }
         let [x, y, z] = dims.coords(cell);
-        genome.points.push(GaussianPoint {
+        Some(GaussianPoint {
             position: dims.normalized_centre(x, y, z),
             density,
             falloff: limits.falloff[0],
             material: MaterialId(material as u8),
-        });
-        Some(())
+        })
     }
 
     /// The model step's children of `genome` (this site's): the first change of its sequence,

@@ -166,14 +166,15 @@ impl LocalSearchParams {
     ) -> Option<BoundarySite> {
         (self.insertion > 0.0).then(|| {
             let site = BoundarySite::new(genome, scene, dims);
-            match self.insertion_by {
-                InsertionBy::Random => site,
-                InsertionBy::FlipModel if self.model_steps == 0 => site.guided_by(scene, outcome),
-                InsertionBy::FlipModel => site.guided_by(scene, outcome).with_model_step(
+            match (self.insertion_by, self.model_steps) {
+                (InsertionBy::Random, _) => site,
+                (InsertionBy::FlipModel, 0) => site.guided_by(scene, outcome),
+                // The longest of `model_steps` children takes 2^(model_steps - 1) changes.
+                (InsertionBy::FlipModel, steps) => site.guided_by(scene, outcome).with_model_step(
                     genome,
                     scene,
                     outcome,
-                    1 << (self.model_steps - 1),
+                    1 << (steps - 1),
                 ),
             }
         })

@@ -148,8 +148,9 @@ impl<'a> BeamFlipModel<'a> {
     }
 
     /// The normalized deflection the model predicts at every station (the clamp's included) with
-    /// the segments `changed`, and the model's tip deflection's factor of change.
-    fn predicted_profile(&self, changed: &[Changed]) -> (Vec<f64>, f64) {
+    /// the segments `changed`, in station order, and the model's tip deflection's factor of
+    /// change. Lazy: a gain only sums it, and the greedy sequence asks for thousands an epoch.
+    fn predicted_profile(&self, changed: &[Changed]) -> (impl Iterator<Item = f64> + '_, f64) {
         let tip = self.tip_layer();
         // A changed segment's change of rotation and shear moves every station beyond it.
         let changes: Vec<(usize, f64, f64)> = (changed.iter())
@@ -159,7 +160,7 @@ impl<'a> BeamFlipModel<'a> {
                 (s, b1 - b0, s1 - s0)
             })
             .collect();
-        let shift = |j: usize| -> f64 {
+        let shift = move |j: usize| -> f64 {
             (changes.iter())
                 .filter(|&&(s, _, _)| s <= j)
                 .map(|&(s, bend, shear)| bend * (j as f64 - (s as f64 - 0.5)) + shear)
@@ -167,9 +168,7 @@ impl<'a> BeamFlipModel<'a> {
                 / self.tip
         };
         let scale = 1.0 + shift(tip);
-        let profile = (0..=tip)
-            .map(|j| (self.deflection[j] + shift(j)) / scale)
-            .collect();
+        let profile = (0..=tip).map(move |j| (self.deflection[j] + shift(j)) / scale);
         (profile, scale)
     }
 
@@ -216,12 +215,13 @@ impl<'a> BeamFlipModel<'a> {
         )))
     }
 
-    /// The sum of squares of `profile` against the target.
-    fn squares_of(&self, profile: &[f64]) -> f64 {
-        (1..profile.len())
-            .map(|j| {
+    /// The sum of squares against the target of `profile`, every station's deflection from the
+    /// clamp's on (the clamp's own is not counted).
+    fn squares_of(&self, profile: impl Iterator<Item = f64>) -> f64 {
+        (profile.enumerate().skip(1))
+            .map(|(j, w)| {
                 let target = self.deflection[j] - self.residual[j];
-                (profile[j] - target).powi(2)
+                (w - target).powi(2)
             })
             .sum()
     }
@@ -232,7 +232,7 @@ impl FlipModel for BeamFlipModel<'_> {
     /// the state `to`; minus infinity for a flip that would cut the beam.
     fn gain(&self, cell: usize, to: Option<MaterialId>) -> f64 {
         match self.flipped(cell, to) {
-            Some(changed) => self.squares - self.squares_of(&self.predicted_profile(&changed).0),
+            Some(changed) => self.squares - self.squares_of(self.predicted_profile(&changed).0),
             None => f64::NEG_INFINITY,
         }
     }
@@ -244,12 +244,13 @@ impl FlipModel for BeamFlipModel<'_> {
             return;
         };
         let (profile, scale) = self.predicted_profile(&changed);
+        let profile: Vec<f64> = profile.collect();
         for (j, w) in profile.into_iter().enumerate() {
             let target = self.deflection[j] - self.residual[j];
             self.deflection[j] = w;
             self.residual[j] = w - target;
         }
-        self.squares = self.squares_of(&self.deflection);
+        self.squares = self.squares_of(self.deflection.iter().copied());
         self.tip *= scale;
         for (s, section, compliance) in changed {
             self.sections[s] = section;
