@@ -278,8 +278,9 @@ impl BoundarySite {
     /// the first two, four, ... up to `count` children (fewer where the sequence is shorter), each
     /// change one appended point; none without a sequence (see [`BoundarySite::with_model_step`]).
     /// The model ranks well and sizes poorly: from an arc design at 0.92 % its first change alone
-    /// took the error to 0.77 %, its first eight to 0.66 %, and its first sixteen past the start
-    /// (docs/evolution.md, session 45), so the steps grow from one change, not shrink from many.
+    /// took the error to 0.84 %, its first eight to 0.67 %, its first sixteen back to 0.83 %, and
+    /// from one at 0.25 % its first change made it worse (docs/evolution.md, session 45;
+    /// `model_sequence` bench), so the steps grow from one change, not shrink from many.
     pub fn model_step_children(&self, genome: &Genome, scene: &Scene, count: usize) -> Vec<Genome> {
         let lengths: Vec<usize> = (0..count.min(MAX_MODEL_STEPS))
             .map(|k| 1 << k)

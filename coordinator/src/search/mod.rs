@@ -21,7 +21,7 @@ pub use combination::{CombineBy, Combining};
 pub use diversity::{
     DiversityLog, IslandDiversity, design_distance, mean_pairwise_distance, measure,
 };
-pub use insertion::{BoundarySite, InsertionBy, other_state};
+pub use insertion::{BoundarySite, InsertionBy, MAX_MODEL_STEPS, other_state};
 pub use island::{Breeding, Child, Individual, Island, SharedBest};
 pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,
