@@ -14,7 +14,7 @@
 mod design;
 
 use amorph::task::Outcome;
-use amorph_coordinator::search::{BoundarySite, MAX_MODEL_STEPS};
+use amorph_coordinator::search::{InsertionBy, LocalSearchParams, MAX_MODEL_STEPS};
 
 fn main() {
     let args = design::arguments(2, "model_sequence <design.json> <config.toml> [<children>]");
@@ -29,14 +29,20 @@ fn main() {
     );
     let figure = |o: &Outcome| scene.figure(o).unwrap_or(f64::NAN);
     let start = scene.evaluate(&genome, dims);
-    let limit = 1 << (children - 1);
-    let site =
-        BoundarySite::new(&genome, scene, dims).with_model_step(&genome, scene, &start, limit);
+    // The site the run builds for the best, so the bench follows the run's rule for the limit.
+    let local = LocalSearchParams {
+        insertion: 1.0,
+        insertion_by: InsertionBy::FlipModel,
+        model_steps: children,
+        ..Default::default()
+    };
+    let site = (local.boundary_site(&genome, &start, scene, dims)).expect("insertion is on");
     let steps = site.model_step_children(&genome, scene, children);
     println!(
-        "design {:.4}; {} children from a sequence of at most {limit} changes",
+        "design {:.4}; {} children from a sequence of at most {} changes",
         figure(&start),
-        steps.len()
+        steps.len(),
+        1 << (children - 1)
     );
     for (k, child) in steps.iter().enumerate() {
         println!(
