@@ -90,4 +90,33 @@ if [ "$got" != "$want" ]; then
   printf 'check-recipes: study.sh summary printed\n%s\nexpected\n%s\n' "$got" "$want" >&2
   exit 1
 fi
-echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs, study.sh resume finishes what a stop cut short, study.sh summary ranks settings"
+# study.sh handovers (the handover bench's CSV): a run that ended at its switch to the final level
+# (its history has no final-level row; the summary has the design it handed over) is listed with
+# its evaluations and error there, a whole run is not.
+handover_run() { # <name> <seed> <final-level row or "none">
+  local dir="$study/ho/$1-s$2"
+  mkdir -p "$dir"
+  printf 'seed = %s
+[search]
+islands = 8
+population = 6
+[scene]
+target = "circular_arc"
+[resolution]
+levels = [[6, 20, 6], [12, 40, 12]]
+' "$2" > "$dir/config.toml"
+  printf 'epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_rms_percent
+1,96,1.0,6x20x6,0,-1,0.4
+' > "$dir/history.csv"
+  [ "$3" = none ] || printf '2,%s,2.0,12x40x12,0,-1,0.09\n' "$3" >> "$dir/history.csv"
+  printf '{"stop": "target_reached", "resolution": "12x40x12", "evaluations": 145, "best_rms_percent": 0.8125}' > "$dir/summary.json"
+}
+handover_run ho-8x6 4 none; handover_run whole-8x6 5 190
+got=$(deploy/study.sh handovers 47 "$study/ho")
+want='target,islands,population,seed,switch_evaluations,handover_rms_percent,session
+circular_arc,8,6,4,145,0.8125,47'
+if [ "$got" != "$want" ]; then
+  printf 'check-recipes: study.sh handovers printed\n%s\nexpected\n%s\n' "$got" "$want" >&2
+  exit 1
+fi
+echo "check-recipes: Kubernetes manifests valid, scripts parse, study.sh --set edits configs, study.sh resume finishes what a stop cut short, study.sh summary ranks settings, study.sh handovers lists hand-overs"

@@ -7,6 +7,7 @@
 #   deploy/study.sh resume <out> [--jobs <n>]
 #   deploy/study.sh table <out> [<out>...]
 #   deploy/study.sh summary <out> [<out>...]
+#   deploy/study.sh handovers <session> <out> [<out>...]
 #
 # `run` copies the config per seed with `name = <label>-s<seed>`, `seed = <seed>` and
 # `results_dir = <out>`, appends the TOML snippet (sections the config does not already have,
@@ -22,6 +23,10 @@
 # evaluations at which the run first reached the paper's simulated error (Table III) and half of it,
 # and the count at the final level's first epoch (how many of them the coarser levels took); a run
 # with no summary.json shows as unfinished (still going, or killed), one a signal stopped as shutdown.
+# `handovers` prints, as CSV for the handover bench (docs/data/handover.csv), every run that ended at
+# its switch to the final level (one run with `--target 100`): the evaluations there, the
+# switch's re-evaluations included, and the best design's RMS error on the final grid, before any
+# of its children (the start of the finest level's climb), labelled with <session>.
 # `summary` prints one row per setting (runs named <setting>-s<seed>) and target over the runs
 # whose count is known (ended, or already past the paper's value): how many reached the paper's
 # value, the median and quartiles of the evaluations to it (a run that ended short counts as
@@ -40,7 +45,7 @@ set -euo pipefail
 {
 
 usage() {
-    sed -n '4,9p' "$0" | sed 's/^# *//' >&2
+    sed -n '4,10p' "$0" | sed 's/^# *//' >&2
     exit 2
 }
 
@@ -213,10 +218,19 @@ def read(run):
         "seed": config["seed"], "evaluations": evals, "stop": summary.get("stop", "unfinished"),
         "start": points[0][0] if points else None, "best": min((v for _, v in points), default=None),
         "paper": paper, "first": first, "wall": summary.get("wall_seconds", wall),
+        "islands": config.get("search", {}).get("islands", 1),
+        "population": config.get("search", {}).get("population"),
+        # Ended at the switch: the final level wrote no history row, only the summary.
+        "at_switch": summary.get("stop") == "target_reached" and len(points) == 1
+        and not any(r["resolution"] == final for r in rows),
+        "switch_rms": summary.get("best_rms_percent"),
     }
 
 
 mode, outs = sys.argv[1], sys.argv[2:]
+session = None
+if mode == "handovers":
+    session, outs = outs[0], outs[1:]
 runs = [read(run) for out in outs for run in sorted(pathlib.Path(out).iterdir())
         if (run / "history.csv").exists()]
 fmt = lambda v: "–" if v is None else f"{v:.4g}"
@@ -226,6 +240,14 @@ if mode == "table":
     for r in runs:
         print(f"| {r['name']} | {r['target']} | {r['seed']} | {r['evaluations']} | {r['stop']} | {r['start'] or '–'} | "
               f"{fmt(r['best'])} | {fmt(r['paper'])} | {r['first'].get('paper', '–')} | {r['first'].get('half', '–')} | {r['wall']:.0f} |")
+    sys.exit()
+
+if mode == "handovers":
+    print("target,islands,population,seed,switch_evaluations,handover_rms_percent,session")
+    for r in sorted((r for r in runs if r["at_switch"]),
+                    key=lambda r: (r["target"], r["islands"], r["population"], r["seed"])):
+        print(f"{r['target']},{r['islands']},{r['population']},{r['seed']},{r['evaluations']},"
+              f"{r['switch_rms']:.6g},{session}")
     sys.exit()
 
 # summary: one row per setting (a run's name less its "-s<seed>"), over the runs whose count is
@@ -277,6 +299,10 @@ resume)
     ;;
 table | summary)
     [[ $# -ge 2 ]] || usage
+    table "$@"
+    ;;
+handovers)
+    [[ $# -ge 3 ]] || usage
     table "$@"
     ;;
 *) usage ;;

@@ -227,13 +227,15 @@ pub fn sign_test(wins: u64, losses: u64) -> f64 {
 
 /// The 5th and 95th percentiles of `statistic` over `resamples` redraws of the samples, each
 /// redrawn with replacement to its own size (a percentile bootstrap). NaN statistics sort last.
-pub fn bootstrap_interval(
-    samples: &[&[Reach]],
+/// A sample's items are runs' outcomes, or whole records (a run's hand-over and its count) where
+/// a statistic needs several figures of one run to stay together.
+pub fn bootstrap_interval<T: Copy>(
+    samples: &[&[T]],
     resamples: usize,
     rng: &mut ChaCha8Rng,
-    mut statistic: impl FnMut(&[Vec<Reach>]) -> f64,
+    mut statistic: impl FnMut(&[Vec<T>]) -> f64,
 ) -> [f64; 2] {
-    let mut drawn: Vec<Vec<Reach>> = samples
+    let mut drawn: Vec<Vec<T>> = samples
         .iter()
         .map(|s| Vec::with_capacity(s.len()))
         .collect();
