@@ -305,29 +305,24 @@ fn climb_against_handover(
         println!("|---|---|---|---|---|---|---|");
         let one = cells.get(&(target, 1));
         for (&(_, islands), list) in cells.range((target, 0)..=(target, u32::MAX)) {
-            let own: Vec<f64> = climbs
-                .iter()
-                .filter(|c| c.islands == islands)
-                .map(|c| c.ln_climb - line.0 - line.1 * c.ln_rms)
-                .collect();
+            let residuals = |of: &[Climb]| -> Vec<f64> {
+                of.iter()
+                    .filter(|c| c.islands == islands)
+                    .map(|c| c.ln_climb - line.0 - line.1 * c.ln_rms)
+                    .collect()
+            };
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+            let own = residuals(&climbs);
             let residual = if own.is_empty() {
                 "–".to_string()
             } else {
-                format!("{:+.2}", own.iter().sum::<f64>() / own.len() as f64)
+                format!("{:+.2}", mean(&own))
             };
-            let cut: Vec<f64> = stopped
-                .iter()
-                .filter(|c| c.islands == islands)
-                .map(|c| c.ln_climb - line.0 - line.1 * c.ln_rms)
-                .collect();
+            let cut = residuals(&stopped);
             let bound = if cut.is_empty() {
                 "–".to_string()
             } else {
-                let all = own.iter().chain(&cut);
-                format!(
-                    "≥ {:+.2}",
-                    all.sum::<f64>() / (own.len() + cut.len()) as f64
-                )
+                format!("≥ {:+.2}", mean(&[own.clone(), cut].concat()))
             };
             let expected = expected_count(list, paper, line);
             let ratio = match one.filter(|_| islands > 1) {
