@@ -96,18 +96,8 @@ fi
 handover_run() { # <name> <seed> <final-level row or "none">
   local dir="$study/ho/$1-s$2"
   mkdir -p "$dir"
-  printf 'seed = %s
-[search]
-islands = 8
-population = 6
-[scene]
-target = "circular_arc"
-[resolution]
-levels = [[6, 20, 6], [12, 40, 12]]
-' "$2" > "$dir/config.toml"
-  printf 'epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_rms_percent
-1,96,1.0,6x20x6,0,-1,0.4
-' > "$dir/history.csv"
+  printf 'seed = %s\n[search]\nislands = 8\npopulation = 6\n[scene]\ntarget = "circular_arc"\n[resolution]\nlevels = [[6, 20, 6], [12, 40, 12]]\n' "$2" > "$dir/config.toml"
+  printf 'epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_rms_percent\n1,96,1.0,6x20x6,0,-1,0.4\n' > "$dir/history.csv"
   [ "$3" = none ] || printf '2,%s,2.0,12x40x12,0,-1,0.09\n' "$3" >> "$dir/history.csv"
   printf '{"stop": "target_reached", "resolution": "12x40x12", "evaluations": 145, "best_rms_percent": 0.8125}' > "$dir/summary.json"
 }

@@ -220,8 +220,8 @@ def read(run):
         "paper": paper, "first": first, "wall": summary.get("wall_seconds", wall),
         "islands": config.get("search", {}).get("islands", 1),
         "population": config.get("search", {}).get("population"),
-        # Ended at the switch: the final level wrote no history row, only the summary.
-        "at_switch": summary.get("stop") == "target_reached" and len(points) == 1
+        # Ended at the switch: the summary is at the final level, which wrote no history row.
+        "at_switch": summary.get("stop") == "target_reached" and summary.get("resolution") == final
         and not any(r["resolution"] == final for r in rows),
         "switch_rms": summary.get("best_rms_percent"),
     }

@@ -4,8 +4,8 @@
 //! best, whatever the island count, so a run's count to the paper's value is the evaluations its
 //! coarse level took before the switch (E) plus the climb's from the design the switch handed over
 //! (C), and islands can change only E and that design's error on the fine grid (R0). A hand-over
-//! is cheap to measure (a run stopped at its first finest epoch: `deploy/study.sh run ... --target
-//! 100`, half a minute), a whole run is not; so this bench measures the islands' effect on the
+//! is cheap to measure (a run stopped right after the switch's re-evaluation: `deploy/study.sh run
+//! ... --target 100`, half a minute), a whole run is not; so this bench measures the islands' effect on the
 //! hand-over over many seeds, and the climb's cost against R0 over the whole runs already made.
 //!
 //! `cargo bench -p amorph-coordinator --bench handover -- $PWD/docs/data/handover.csv
@@ -38,8 +38,8 @@ const RESAMPLES: usize = 10_000;
 
 type Key = (String, u32, u32, u64);
 
-/// One hand-over: evaluations before the first finest epoch, and the best design's RMS error (%)
-/// there, after the switch's re-evaluation.
+/// One hand-over: evaluations at the switch, its re-evaluations included, and the best design's
+/// RMS error (%) on the final grid there, before any child of the finest level.
 #[derive(Clone, Copy, Debug)]
 struct Handover {
     switch: f64,
@@ -121,6 +121,11 @@ fn below(a: &[f64], b: &[f64]) -> f64 {
 /// A fit ln C = a + b ln R0: (a, b, r, the smearing factor mean(exp(residual))).
 type Fit = (f64, f64, f64, f64);
 
+/// How much longer a climb was than the fit expects, in ln C.
+fn residual((a, b, _, _): Fit, c: &Climb) -> f64 {
+    c.ln_climb - a - b * c.ln_rms
+}
+
 /// Least squares.
 fn fit(climbs: &[Climb]) -> Fit {
     let n = climbs.len() as f64;
@@ -137,7 +142,7 @@ fn fit(climbs: &[Climb]) -> Fit {
     let a = my - b * mx;
     let smear = climbs
         .iter()
-        .map(|c| (c.ln_climb - a - b * c.ln_rms).exp())
+        .map(|c| residual((a, b, 0.0, 0.0), c).exp())
         .sum::<f64>()
         / n;
     (a, b, sxy / (sxx * syy).sqrt(), smear)
@@ -259,19 +264,16 @@ fn climb_against_handover(
                 continue;
             };
             measured.entry(run.islands).or_default().push(run.reach);
+            let climb = |n: u64| Climb {
+                islands: run.islands,
+                ln_rms: h.rms.ln(),
+                ln_climb: (n as f64 - h.switch).ln(),
+            };
             match run.reach {
-                Reach::Reached(n) if h.rms > paper && n as f64 > h.switch => climbs.push(Climb {
-                    islands: run.islands,
-                    ln_rms: h.rms.ln(),
-                    ln_climb: (n as f64 - h.switch).ln(),
-                }),
+                Reach::Reached(n) if h.rms > paper && n as f64 > h.switch => climbs.push(climb(n)),
                 Reach::Reached(_) => at_switch += 1,
                 // Its climb is at least this long; kept apart for the residuals' lower bound.
-                Reach::Stopped(n) if n as f64 > h.switch => stopped.push(Climb {
-                    islands: run.islands,
-                    ln_rms: h.rms.ln(),
-                    ln_climb: (n as f64 - h.switch).ln(),
-                }),
+                Reach::Stopped(n) if n as f64 > h.switch => stopped.push(climb(n)),
                 // Stopped before its switch: it says nothing of the climb.
                 Reach::Stopped(_) => early += 1,
             }
@@ -285,7 +287,7 @@ fn climb_against_handover(
             bootstrap_interval(&[&climbs[..]], RESAMPLES, &mut rng(1000), |s| fit(&s[0]).1);
         let spread = (climbs
             .iter()
-            .map(|c| (c.ln_climb - line.0 - line.1 * c.ln_rms).powi(2))
+            .map(|c| residual(line, c).powi(2))
             .sum::<f64>()
             / (climbs.len() - 2) as f64)
             .sqrt();
@@ -308,7 +310,7 @@ fn climb_against_handover(
             let residuals = |of: &[Climb]| -> Vec<f64> {
                 of.iter()
                     .filter(|c| c.islands == islands)
-                    .map(|c| c.ln_climb - line.0 - line.1 * c.ln_rms)
+                    .map(|c| residual(line, c))
                     .collect()
             };
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
