@@ -287,8 +287,8 @@ fn climb_against_handover(
             }
         }
         // Two parameters through a handful of climbs whose luck spreads ln C by 0.6-1.1 (the arc,
-        // the polynomial) fit that luck, not the hand-over's effect: session 41's three polynomial
-        // runs with the key predicted a mean count of 43,000.
+        // the polynomial) fit that luck, not the hand-over's effect: session 41's seven polynomial
+        // climbs with the key predicted one island a mean count of 43,000.
         if climbs.len() < MIN_CLIMBS {
             println!(
                 "\n{target}: {} climbs with a known hand-over, fewer than {MIN_CLIMBS}, no fit",
