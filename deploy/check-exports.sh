@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Opens a design's fabrication files in independent readers (run by .ci/run, issue 15):
+# Opens a design's fabrication files in independent readers (run by .ci/run):
 # - every per-material STL in admesh (Debian's package, installed if missing): no facet it had to
 #   remove, add, reverse or fix, no backwards edge, and the volume the voxel count gives;
 # - the 3MF in lib3mf's strict reader (PyPI, in a virtualenv under target/): no warning, one

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fault tests of the docker-compose cluster (issue 5), run by .ci/run. Each scenario brings up one
+# Fault tests of the docker-compose cluster, run by .ci/run. Each scenario brings up one
 # coordinator and two worker containers on a short beam run, breaks something mid-run, and checks
 # that the final population is byte-identical to the same run done in one process on the host:
 #   plain      nothing breaks
@@ -131,4 +131,16 @@ run_scenario() {
 }
 
 for s in "${scenarios[@]}"; do run_scenario "$s"; done
-log "all passed: ${scenarios[*]}"
+
+# The documented cluster commands: deploy/up.sh, then deploy/logs.sh and deploy/down.sh from a new
+# shell with nothing exported, which read the settings up.sh kept.
+up_project="amorphftup$$"
+projects+=("$up_project")
+mkdir -p "$work/up/results" "$work/up/state"
+AMORPH_RESULTS="$work/up/results" AMORPH_PROJECT="$up_project" AMORPH_PROFILE="$profile" \
+  XDG_STATE_HOME="$work/up/state" "$root/deploy/up.sh" "$AMORPH_CONFIG" 1 >/dev/null 2>&1
+fresh_shell() { env -i PATH="$PATH" HOME="$HOME" XDG_STATE_HOME="$work/up/state" AMORPH_PROJECT="$up_project" "$@"; }
+fresh_shell "$root/deploy/logs.sh" --tail 5 >/dev/null
+fresh_shell "$root/deploy/down.sh" >/dev/null 2>&1
+log "up.sh, then logs.sh and down.sh from a new shell"
+log "all passed: ${scenarios[*]}, up/logs/down"

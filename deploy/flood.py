@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Issue 12, item 6, re-run by hand against a running coordinator (docs/cluster.md, threat model).
+"""A connection flood, run by hand against a running coordinator (docs/reference/protocol.md).
 
-Floods the coordinator from one source address the way the issue's tester did: idle TCP
+Floods the coordinator from one source address the way a hostile peer could: idle TCP
 connections that never send a byte, and HTTP/2 requests that are opened and never finished; while
 the flood lasts it asks the health service once a second from another address, and reads the
 coordinator's memory and the run store's evaluation count, so one can see that the coordinator

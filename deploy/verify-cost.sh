@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# What verification costs (docs/cluster.md): runs a config with the coordinator's own workers off
-# and two outside `worker --connect` processes of one thread each, with `[cluster] verify` on or
+# What verification costs (docs/how-to/cluster.md): runs a config with the coordinator's own workers
+# off and two outside `worker --connect` processes of one thread each, with `[cluster] verify` on or
 # off, and prints the evaluations and checks its run store holds.
 #
 #   deploy/verify-cost.sh <config.toml> <out> <label> <true|false> <port> [evaluations]

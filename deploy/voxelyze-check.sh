@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Runs robots' exported design.vxa through another Voxelyze build and prints, per design, our
-# centre-of-mass travel beside the reader's (issue 15; docs/exports.md "What Voxelyze does with our
-# VXA"). The reader is not part of this repository: build it from its public sources as the docs
-# say and pass its `voxelyze` binary.
+# centre-of-mass travel beside the reader's (docs/how-to/voxelyze.md). The reader is not part of
+# this repository: build it from its public sources as the docs say and pass its `voxelyze`
+# binary.
 #
 #   deploy/voxelyze-check.sh VOXELYZE CONFIG RESOLUTION GENOME.json...
 #
@@ -19,7 +19,7 @@
 # DTFRAC=<f> runs both programs at step fraction f instead of the file's (the file's <DtFrac> is
 # rewritten after export, ours is evaluated at dt_fraction = f): a walking gait is a chaotic contact
 # problem, so the comparison at several steps tells the programs' difference from each one's own
-# step sensitivity (docs/exports.md).
+# step sensitivity (docs/how-to/voxelyze.md).
 set -euo pipefail
 if [ $# -lt 4 ]; then
   sed -n '2,15p' "$0" >&2

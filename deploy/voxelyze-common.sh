@@ -1,4 +1,4 @@
-# Sourced by deploy/voxelyze-check.sh and deploy/voxelyze-ensemble.sh (issue 15; docs/exports.md):
+# Sourced by deploy/voxelyze-check.sh and deploy/voxelyze-ensemble.sh (docs/how-to/voxelyze.md):
 # what both mean by "the VoxCAD-era Voxelyze's floor on our side" and how both run that reader.
 # Each caller sets `tool` (its name, for messages) before sourcing.
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Compares our travel with the VoxCAD-era Voxelyze's over an ensemble of imperceptibly different
-# starts (issue 15; docs/exports.md, "Each program against itself"). A walking gait is a chaotic
+# starts (docs/how-to/voxelyze.md). A walking gait is a chaotic
 # contact problem: a design's 10-cycle travel in either program can move by a quarter when its
 # actuation starts a few microseconds later. So one run per program compares two samples of two
 # spreads; this script runs N and compares the spreads.

@@ -1,5 +1,12 @@
-//! The run configuration: a TOML file read strictly (unknown keys are errors) and validated into a
-//! [`RunConfig`] before anything runs. Every error is one line naming the key.
+//! The run configuration: a TOML file read strictly (unknown keys are errors), with command-line
+//! overrides (`--set`) and its search preset laid under it, validated into a [`RunConfig`] before
+//! anything runs. Every error is one line naming the key.
+
+mod overrides;
+mod preset;
+
+pub use overrides::Override;
+pub use preset::Preset;
 
 use std::path::{Path, PathBuf};
 
@@ -11,10 +18,7 @@ use serde::{Deserialize, Serialize};
 pub use crate::cluster::settings::ClusterSection;
 use crate::cluster::settings::ClusterSettings;
 pub use crate::results::ExportSection;
-use crate::search::{
-    CrossoverParams, LocalSearchParams, MigrationParams, ResolutionSchedule, StepAdaptation,
-    Variation,
-};
+use crate::search::{LocalSearchParams, MigrationParams, ResolutionSchedule};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -31,6 +35,8 @@ pub enum ConfigError {
     },
     #[error("config {path}: {message}")]
     Invalid { path: PathBuf, message: String },
+    #[error("config {path}: {message}")]
+    Override { path: PathBuf, message: String },
 }
 
 pub type Result<T> = std::result::Result<T, ConfigError>;
@@ -60,10 +66,6 @@ pub struct RawConfig {
     pub scene: Scene,
 }
 
-fn is_zero(n: &usize) -> bool {
-    *n == 0
-}
-
 fn default_results_dir() -> PathBuf {
     PathBuf::from("results")
 }
@@ -71,62 +73,39 @@ fn default_results_dir() -> PathBuf {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SearchSection {
+    /// The defaults of the search keys a config leaves out ([`Preset`]); every key here and in
+    /// `local_search`, and `resolution`'s stall rule, may come from it.
+    pub preset: Preset,
     /// Individuals per island (paper: 50).
     pub population: usize,
     /// Number of islands.
     pub islands: usize,
     /// Children each island breeds per epoch (evaluated in parallel).
     pub children_per_epoch: usize,
-    /// Islands on demand: with N > 0 the run starts as one island of `islands × population`
-    /// breeding `islands × children_per_epoch` children an epoch, and splits it into `islands`
-    /// islands (dealt by rank) once the run's best at the finest resolution has improved by less
-    /// than `resolution.min_improvement` for N epochs in a row. 0 (the default): the islands exist
-    /// from the first epoch, as in the paper.
-    #[serde(skip_serializing_if = "is_zero")]
-    pub split_after_stall: usize,
     /// Children whose design at the level's resolution is their dominant parent's are not
     /// evaluated: they could not replace it, so the run breeds and replaces exactly as without
-    /// the key, on fewer evaluations (`search::unchanged`). Off by default: the paper evaluates
-    /// every child.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    /// the key, on fewer evaluations (`search::unchanged`). The paper evaluates every child.
     pub skip_unchanged: bool,
     /// Gaussian points in each initial random genome.
     pub initial_points: usize,
     pub mutation: MutationParams,
     pub migration: MigrationParams,
-    /// Nudges of each island's best design (off by default).
+    /// Nudges of the best design (off in the paper's search).
     pub local_search: LocalSearchParams,
-    /// Adapting the mutation step to each island's success (fixed by default).
-    pub step_adaptation: StepAdaptation,
-    /// Where crossover cuts (uniformly oriented planes by default, as in the paper).
-    pub crossover: CrossoverParams,
-}
-
-impl SearchSection {
-    /// The variation policies beyond the paper's operators.
-    pub fn variation(&self) -> Variation {
-        Variation {
-            local_search: self.local_search.clone(),
-            step_adaptation: self.step_adaptation.clone(),
-            crossover: self.crossover.clone(),
-        }
-    }
 }
 
 impl Default for SearchSection {
     fn default() -> Self {
         Self {
+            preset: Preset::Paper,
             population: 50,
             islands: 1,
             children_per_epoch: 50,
-            split_after_stall: 0,
             skip_unchanged: false,
             initial_points: 40,
             mutation: MutationParams::default(),
             migration: MigrationParams::default(),
             local_search: LocalSearchParams::default(),
-            step_adaptation: StepAdaptation::default(),
-            crossover: CrossoverParams::default(),
         }
     }
 }
@@ -151,19 +130,40 @@ pub struct RunConfig {
     pub source: PathBuf,
 }
 
+/// The quickstart, compiled in: what `coordinator` runs without `--config`.
+pub const QUICKSTART: &str = include_str!("../../configs/quickstart.toml");
+
 impl RunConfig {
     /// Reads, parses and validates a config file.
     pub fn load(path: &Path) -> Result<Self> {
+        Self::load_with(path, &[])
+    }
+
+    /// Reads a config file and applies `overrides` (`--set`) before validating it.
+    pub fn load_with(path: &Path, overrides: &[Override]) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
             path: path.to_owned(),
             source,
         })?;
-        Self::parse(&text, path)
+        Self::parse_with(&text, path, overrides)
+    }
+
+    /// The embedded quickstart with `overrides`; its path names it in messages and is where a
+    /// custom profile's file would be looked for.
+    pub fn quickstart(overrides: &[Override]) -> Result<Self> {
+        Self::parse_with(QUICKSTART, Path::new("configs/quickstart.toml"), overrides)
     }
 
     /// Parses and validates config text; `path` only names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let raw: RawConfig = toml::from_str(text).map_err(|e| {
+        Self::parse_with(text, path, &[])
+    }
+
+    /// Parses config text, applies `overrides` in order, lays the search preset under the result
+    /// and validates it. Errors in the text name its line; an override that breaks the config is
+    /// named by its `--set`.
+    pub fn parse_with(text: &str, path: &Path, overrides: &[Override]) -> Result<Self> {
+        let parse_error = |text: &str, e: toml::de::Error| {
             let e = scene_toml::relocate(text, SceneAt::Config, &e).unwrap_or(e);
             let (line, message) = scene_toml::locate(text, &e);
             ConfigError::Parse {
@@ -171,7 +171,41 @@ impl RunConfig {
                 line,
                 message,
             }
-        })?;
+        };
+        // The file alone first, so that its own mistakes are named by their line.
+        toml::from_str::<RawConfig>(text).map_err(|e| parse_error(text, e))?;
+        let mut document: toml::Table = text.parse().map_err(|e| parse_error(text, e))?;
+        for set in overrides {
+            let refused = |message: String| ConfigError::Override {
+                path: path.to_owned(),
+                message,
+            };
+            set.apply(&mut document).map_err(refused)?;
+            let written = toml::to_string(&document).map_err(|e| refused(e.to_string()))?;
+            toml::from_str::<RawConfig>(&written).map_err(|e| {
+                let e = scene_toml::relocate(&written, SceneAt::Config, &e).unwrap_or(e);
+                refused(format!(
+                    "--set {}: {}",
+                    set.text,
+                    e.message().replace('\n', " ")
+                ))
+            })?;
+        }
+        let raw: RawConfig = toml::from_str(&toml::to_string(&document).expect("a TOML table"))
+            .expect("checked above");
+        let preset = (document.get("search"))
+            .and_then(|s| s.get("preset"))
+            .map_or_else(
+                || Preset::for_scene_kind(raw.scene.kind()),
+                |_| raw.search.preset,
+            );
+        preset::lay_under(&mut document, preset.defaults());
+        let raw = toml::from_str(&toml::to_string(&document).expect("a TOML table")).map_err(
+            |e: toml::de::Error| ConfigError::Invalid {
+                path: path.to_owned(),
+                message: format!("the {} preset: {}", preset.key(), e.message()),
+            },
+        )?;
         Self::try_from_raw(raw, path)
     }
 
@@ -242,18 +276,6 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
             s.islands * s.children_per_epoch
         ));
     }
-    if s.split_after_stall > 0 && s.islands < 2 {
-        return Err(format!(
-            "search.split_after_stall = {} needs search.islands of 2 or more (the count to split into)",
-            s.split_after_stall
-        ));
-    }
-    if s.split_after_stall > 0 && raw.resolution.merge_islands {
-        return Err(format!(
-            "search.split_after_stall = {} and resolution.merge_islands = true contradict each other (a run that splits late has nothing to merge at a switch)",
-            s.split_after_stall
-        ));
-    }
     let limits = raw.scene.limits();
     if s.initial_points == 0 || s.initial_points > limits.max_points {
         return Err(format!(
@@ -269,24 +291,7 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
     {
         return Err("search.migration.topology.probability must be in [0, 1]".into());
     }
-    let variation = s.variation();
-    variation.validate()?;
-    let by = variation.local_search.combine_by;
-    if by.needs_residuals() && !raw.scene.has_residuals() {
-        return Err(format!(
-            "search.local_search.combine_by = \"{}\": a {} scene's fitness is not a sum of squared residuals",
-            by.key(),
-            raw.scene.kind()
-        ));
-    }
-    let insertion_by = variation.local_search.insertion_by;
-    if insertion_by != crate::search::InsertionBy::Random && !raw.scene.has_flip_model() {
-        return Err(format!(
-            "search.local_search.insertion_by = \"{}\": a {} scene has no model of single-voxel changes",
-            insertion_by.key(),
-            raw.scene.kind()
-        ));
-    }
+    s.local_search.validate()?;
     let b = &raw.budget;
     if b.evaluations.is_none() && b.wall_seconds.is_none() && b.target_rms_percent.is_none() {
         return Err(

@@ -12,7 +12,6 @@ pub mod results;
 pub mod run;
 pub mod search;
 pub mod store;
-pub mod study;
 pub mod summary;
 pub mod verification;
 

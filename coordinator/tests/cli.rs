@@ -106,3 +106,51 @@ fn a_beam_resolution_lying_on_its_side_is_refused_with_the_fix() {
         "{stderr}"
     );
 }
+
+/// `--set` changes a key as the file would, is recorded in the run's config.toml, and a bad one
+/// is refused in one line that names it.
+#[test]
+fn set_overrides_a_key_and_is_recorded() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-set");
+    let text = format!("results_dir = \"{}\"\n{GOOD}", dir.display());
+    let path = write_config("set.toml", &text);
+    let path = path.to_str().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
+        .args(["--config", path, "--fresh", "--local-workers", "1"])
+        .args([
+            "--set",
+            "budget.evaluations=12",
+            "--set",
+            "scene.target=polynomial4",
+        ])
+        .args(["--set", "search.preset=paper"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("after 12 evaluations"), "{stdout}");
+    let recorded = std::fs::read_to_string(dir.join("cli").join("config.toml")).unwrap();
+    let recorded: toml::Table = recorded.parse().unwrap();
+    assert_eq!(recorded["scene"]["target"].as_str(), Some("polynomial4"));
+    assert_eq!(recorded["search"]["preset"].as_str(), Some("paper"));
+    assert_eq!(recorded["budget"]["evaluations"].as_integer(), Some(12));
+
+    for (bad, named) in [
+        (
+            "search.local_search.fraction=3",
+            "search.local_search.fraction",
+        ),
+        ("budget.evalutions=5", "evalutions"),
+        ("fraction", "expected key=value"),
+    ] {
+        let (ok, stderr) = coordinator(&["--config", path, "--set", bad]);
+        assert!(!ok, "{bad}");
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+        assert_eq!(errors.len(), 1, "{bad}: {stderr}");
+        assert!(errors[0].contains(named), "{bad}: {stderr}");
+    }
+}

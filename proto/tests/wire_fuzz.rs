@@ -1,8 +1,8 @@
-//! Issue 12: every message a peer sends goes through these decoders before anything else sees
-//! it. Driven here with arbitrary bytes and with real messages whose numbers are replaced by
-//! arbitrary ones (NaN, infinities, extremes, negative counts): no decoder and no plausibility
-//! check may panic, and whatever they accept must be what a domain type can hold. 2,000 cases per
-//! property in CI (`PROPTEST_CASES` raises it for a longer run by hand).
+//! Every message a peer sends goes through these decoders before anything else sees it. Driven here
+//! with arbitrary bytes and with real messages whose numbers are replaced by arbitrary ones (NaN,
+//! infinities, extremes, negative counts): no decoder and no plausibility check may panic, and
+//! whatever they accept must be what a domain type can hold. 2,000 cases per property in CI
+//! (`PROPTEST_CASES` raises it for a longer run by hand).
 
 use amorph::genome::{GaussianPoint, Genome, GenomeLimits};
 use amorph::material::MaterialId;

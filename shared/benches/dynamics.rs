@@ -1,8 +1,8 @@
 //! Dynamics benchmarks (single thread).
 //!
 //! `cargo bench -p amorph --bench dynamics` runs the criterion step benchmarks: the per-pass cost
-//! table on a 10³ block and the N = 10 and N = 20 blocks of the issue (voxel-steps/s as
-//! throughput). Extra modes, selected by a free argument after `--`:
+//! table on a 10³ block and the N = 10 and N = 20 speed blocks (voxel-steps/s as throughput). Extra
+//! modes, selected by a free argument after `--`:
 //! - `eval`: paper-style locomotion evaluations of two random 20³-workspace robots (one the size
 //!   of the paper's, one the largest of 20), timed;
 //! - `min`: the per-pass table and the blocks as the *minimum* time per step over many short
@@ -34,7 +34,7 @@ fn precision() -> LinkPrecision {
     PRECISION.get().copied().unwrap_or_default()
 }
 
-/// The issue's speed scene: an N³ block on the floor with gravity, friction 1.0/0.3, voxels with
+/// The reference speed scene: an N³ block on the floor with gravity, friction 1.0/0.3, voxels with
 /// x < N/2 actuated ±20 % at a 0.5 s period, s = 0.01 m, E = 1 MPa, ν = 0.35, ρ = 1000.
 fn speed_block(n: usize) -> Simulation {
     speed_block_with(n, false)
@@ -386,7 +386,7 @@ struct StudyPoint {
     error: f64,
 }
 
-/// Static tip deflection of the 2r×20r×2r cantilever (the issue's beam at r times the
+/// Static tip deflection of the 2r×20r×2r cantilever (the 2×2×20 test beam at r times the
 /// resolution), settled with near-critical global damping, against F L³/(3EI).
 fn cantilever_run(r: usize, dt_fraction: f64) -> StudyPoint {
     let s = 0.01 / r as f64;
@@ -527,7 +527,7 @@ fn study() {
 /// A log–log plot of relative error against wall time, one line per case and resolution (points
 /// along a line are the time-step fractions), as PNG through the library's own plotter.
 fn study_png(points: &[StudyPoint]) -> Vec<u8> {
-    use amorph::export::{PlotSpec, Series, line_plot};
+    use amorph::report::{PlotSpec, Series, line_plot};
     let colours = [
         [31, 119, 180],
         [214, 39, 40],

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The instruction mix of the hottest functions of a callgrind profile (docs/dynamics.md, session 32).
+"""The instruction mix of the hottest functions of a callgrind profile.
 
     valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file=cg.out <bench binary> robot mixed
     python3 shared/benches/instruction_mix.py cg.out <bench binary> [functions]

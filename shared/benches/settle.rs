@@ -1,10 +1,11 @@
-//! The settling study (issue 14): how much a damped settle shortens a locomotion evaluation, and
-//! how much it moves the fitness, against how much halving the time step moves it.
+//! The settling study: how much a damped settle shortens a locomotion evaluation, and how much it
+//! moves the fitness, against how much halving the time step moves it.
 //!
 //! `cargo bench -p amorph --bench settle -- N [ROBOTS [ZETA]]` evaluates ROBOTS (default 20) random
 //! 88-point robots in an N³ workspace (1 mm voxels at N = 20, as the paper; 2 mm at N = 10, as
 //! `configs/locomotion.toml`) three ways, single thread:
-//! - `reference`: the scene's own damping while settling (the protocol before issue 14);
+//! - `reference`: the scene's own damping while settling (`settle.damping` unset, the
+//!   paper's protocol);
 //! - `settled`: `settle.damping` = ZETA (default 0.1);
 //! - `half_step`: the reference at half the time step, the yardstick for what a change of
 //!   fitness means (a walking gait is a chaotic contact problem).
@@ -15,7 +16,7 @@
 //! `cargo bench -p amorph --bench settle -- step N ROBOTS LINK_ZETA DT_FRACTION` compares a longer
 //! step instead: the candidate (`settled` in the output) is the reference with the link damping
 //! ratio LINK_ZETA and the time-step fraction DT_FRACTION (the explicit link damping bounds the
-//! step: docs/dynamics.md, "Open points"). `FIRST_SEED=k` starts the robots at seed k (seed 13
+//! step: docs/explanation/physics.md). `FIRST_SEED=k` starts the robots at seed k (seed 13
 //! at 10³ is the one random robot that walks, ~10 mm in 10 cycles).
 //!
 //! `cargo bench -p amorph --bench settle -- mixed N ROBOTS` compares the mixed-precision link

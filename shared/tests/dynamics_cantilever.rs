@@ -1,7 +1,6 @@
-//! The 2×2×20 cantilever of the issue against Euler–Bernoulli beam theory: static tip deflection
-//! and first bending frequency, plus energy conservation of its undamped free vibration. Each
-//! with the double and the mixed-precision link kernel: the bounds are the physics' and hold for
-//! both.
+//! A 2×2×20 cantilever against Euler–Bernoulli beam theory: static tip deflection and first bending
+//! frequency, plus energy conservation of its undamped free vibration. Each with the double and the
+//! mixed-precision link kernel: the bounds are the physics' and hold for both.
 
 use std::f64::consts::PI;
 
@@ -99,8 +98,8 @@ fn static_tip_deflection_matches_beam_theory_within_1_percent() {
             100.0 * error
         );
         // The 2×2 bundle of voxel chains has exactly I = (2s)⁴/12 when plane sections stay plane
-        // (which the frame links enforce), so only discretisation of the axial field is left: 1 %
-        // is the issue's bound and leaves room for it.
+        // (which the frame links enforce), so only discretisation of the axial field is left: the
+        // 1 % bound leaves room for it.
         assert!(error.abs() < 0.01, "{precision:?}: error {error}");
         // Still: the residual speed is far below the deflection per vibration period (~4e-3 m/s
         // at the first mode's 2.5 Hz). The mixed kernel's forces carry the f32 rounding of

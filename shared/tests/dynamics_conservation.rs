@@ -51,7 +51,7 @@ fn free_rigid_motion_keeps_shape_and_momenta() {
         relative(sim.angular_momentum(), l0)
     );
     // Links act in equal and opposite pairs and every link's moments balance its force couple
-    // exactly, so only round-off changes the momenta: 1e-9 over 1e4 steps is the bound.
+    // exactly, so only round-off changes the momenta: the bound is 1e-9 over 1e4 steps.
     assert!(relative(sim.linear_momentum(), p0) < 1e-9);
     assert!(relative(sim.angular_momentum(), l0) < 1e-9);
     // The body turned by ~1 rad; the centripetal load strains the links by ω²r·m/k ~ 1e-7, so

@@ -77,8 +77,8 @@ fn block_slides_above_the_friction_angle_with_the_kinetic_acceleration() {
             "{law:?}: incline acceleration {measured:.4} m/s², analytic {analytic:.4}, error {:.3} %",
             100.0 * error
         );
-        // Σ μk·N_i = μk·m g cos θ exactly once the normal forces are steady; 2 % is the bound
-        // and covers the residual contact ringing.
+        // Σ μk·N_i = μk·m g cos θ exactly once the normal forces are steady; the 2 % bound
+        // covers the residual contact ringing.
         assert!(error.abs() < 0.02, "{law:?}: error {error}");
     }
 }
@@ -134,7 +134,7 @@ fn free_actuated_cube_breathes_20_percent_in_volume_within_1_percent() {
     }
     eprintln!("volume ratio between {lo:.5} and {hi:.5}");
     // Uniform expansion of every link by λ = (1 + a sin)^⅓ gives the volume 1 ± 0.2 exactly in the
-    // quasi-static limit; 1 % of the target is the bound.
+    // quasi-static limit; the bound is 1 % of the target.
     assert!((hi - 1.2).abs() < 0.012, "max volume {hi}");
     assert!((lo - 0.8).abs() < 0.008, "min volume {lo}");
 }

@@ -1,7 +1,7 @@
-//! The mixed-precision link kernel over a whole locomotion evaluation (issue 14): it moves a
-//! walking robot's gait less than halving the time step does. That is the yardstick of
-//! docs/dynamics.md ("Longer steps", "Mixed precision"): a gait is a chaotic contact problem, so
-//! a change of fitness means something only against what a finer step changes.
+//! The mixed-precision link kernel over a whole locomotion evaluation: it moves a walking robot's
+//! gait less than halving the time step does. That is the yardstick of docs/explanation/physics.md:
+//! a gait is a chaotic contact problem, so a change of fitness means something only against what a
+//! finer step changes.
 
 use amorph::dynamics::{DynamicScene, LinkPrecision, foam_palette};
 use amorph::genome::{GenomeLimits, random_genome};

@@ -1,7 +1,7 @@
-//! Issue 15, voxel-print slice stacks: sampled at the voxel centres the stack is the voxel design;
-//! at the printer's pitch a Gaussian sphere prints as the sphere its field defines, every image
-//! has the size and colours the pitch and palette give, and each material's printed volume differs
-//! from the voxel design's only inside the voxels its boundary passes through.
+//! Voxel-print slice stacks: sampled at the voxel centres the stack is the voxel design; at the
+//! printer's pitch a Gaussian sphere prints as the sphere its field defines, every image has the
+//! size and colours the pitch and palette give, and each material's printed volume differs from
+//! the voxel design's only inside the voxels its boundary passes through.
 
 use amorph::export::print::{PrintPitch, Slicer, VOID_RGBA, print_colours, write_slice_stack};
 use amorph::genome::{GaussianPoint, Genome};

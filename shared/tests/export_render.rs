@@ -1,8 +1,8 @@
 //! The isometric render: a known design gives a picture that is not blank, shows each material's
 //! own colour (its top faces, unshaded), and encodes as a PNG of the stated size.
 
-use amorph::export::render_isometric;
 use amorph::material::{MaterialId, Palette};
+use amorph::report::render_isometric;
 use amorph::voxel::{GridDims, VoxelGrid};
 
 #[test]

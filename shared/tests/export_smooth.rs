@@ -1,6 +1,6 @@
-//! Issue 6, smooth surfaces: the marching-tetrahedra mesh of a field is a closed, consistently
-//! oriented 2-manifold (also as an STL, where vertices are identified by position), and encloses
-//! the volume of the region it approximates.
+//! Smooth surfaces: the marching-tetrahedra mesh of a field is a closed, consistently oriented
+//! 2-manifold (also as an STL, where vertices are identified by position), and encloses the
+//! volume of the region it approximates.
 
 use std::collections::HashMap;
 

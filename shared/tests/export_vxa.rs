@@ -289,8 +289,9 @@ fn a_truncated_layer_is_refused_naming_the_layer() {
 
 /// A robot's files hold the body as our simulation starts it: on the floor. Those readers drop a
 /// body from where its grid puts it, so a design whose lowest voxels sit in layer 3 fell three
-/// voxels there, tumbled and walked the other way (docs/exports.md). Each voxel keeps its x and y
-/// cell and its material; the empty layers below the body are gone, in the VXA and the VXD alike.
+/// voxels there, tumbled and walked the other way (docs/how-to/voxelyze.md). Each voxel keeps its x
+/// and y cell and its material; the empty layers below the body are gone, in the VXA and the VXD
+/// alike.
 #[test]
 fn a_robot_is_written_resting_on_the_floor() {
     let dims = GridDims::new(4, 3, 6);
@@ -339,8 +340,8 @@ fn a_robot_is_written_resting_on_the_floor() {
 
 /// Both readers (this VXA's and voxcraft-sim's base) damp the floor by ColDampingZ·2√(m·E·s)
 /// whatever their floor spring; ours by 2ζ√(m·k) with k = `stiffness_factor`·E·s. The files must
-/// carry our damping constant: ζ at our default spring, ζ·√factor at any other (session 17 found
-/// the reader-floor check writing ζ = 1/√2 at factor 2, a floor damped √2 less than ours).
+/// carry our damping constant: ζ at our default spring, ζ·√factor at any other (writing ζ = 1/√2
+/// unscaled at factor 2 would give a floor damped √2 less than ours).
 #[test]
 fn the_floor_is_damped_as_ours_whatever_our_floor_spring() {
     for (factor, zeta, expected) in [

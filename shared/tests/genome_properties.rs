@@ -1,4 +1,4 @@
-//! Property tests of the genome and the voxelizer (issue 2).
+//! Property tests of the genome and the voxelizer.
 
 use amorph::genome::{
     CutPlane, DominantParent, Genome, GenomeLimits, MutationParams, crossover, mutate,

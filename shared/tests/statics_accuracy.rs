@@ -47,7 +47,7 @@ fn tip_deflection(model: &StaticModel, displacements: &[[f64; 6]]) -> f64 {
 /// A slender 2×40×2 cantilever matches Euler–Bernoulli F L³ / (3 E I). The lattice's section of
 /// four chains joined by cross links has exactly the continuum I = (2s)⁴/12 (Steiner terms 4·s²·(s/2)²
 /// plus four own s⁴/12), so the only departure is the lattice's shear flexibility, of relative size
-/// ~(h/L)² ≈ 0.3 % here; hence the 0.5 % bound.
+/// ~(h/L)² ≈ 0.3 % here; hence the 0.5 % bound.
 #[test]
 fn slender_beam_matches_euler_bernoulli() {
     let e = 1.0e9;
@@ -213,7 +213,7 @@ fn sparse_solves_equal_dense_solve() {
 }
 
 /// The true residual reaches 1e-9 at stiffness contrasts of 1000:1 and 1e6:1, with the direct
-/// solver and with multigrid PCG (the acceptance bound).
+/// solver and with multigrid PCG (the acceptance bound).
 #[test]
 fn two_material_residual_meets_tolerance() {
     let dims = GridDims::new(4, 20, 4);

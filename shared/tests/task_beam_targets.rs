@@ -1,5 +1,5 @@
-//! Custom beam targets (issue 11): points or a CSV file, joined linearly or by PCHIP, normalized,
-//! validated with the point or the file and line named, and written back unchanged.
+//! Custom beam targets: points or a CSV file, joined linearly or by PCHIP, normalized, validated
+//! with the point or the file and line named, and written back unchanged.
 
 use amorph::task::beam::{CustomProfile, Interpolation, NamedProfile, TargetProfile};
 use amorph::task::{Scene, Task};

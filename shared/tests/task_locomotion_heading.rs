@@ -1,5 +1,5 @@
-//! Locomotion along a heading and up an incline (issue 11): the fitness is travel along the
-//! heading, the slope rises along it, and turning the robot with its heading changes nothing.
+//! Locomotion along a heading and up an incline: the fitness is travel along the heading, the
+//! slope rises along it, and turning the robot with its heading changes nothing.
 
 use amorph::material::MaterialId;
 use amorph::task::locomotion::{LocomotionMetrics, LocomotionScene};

@@ -1,6 +1,6 @@
-//! Issue 14, the damped settle: the settling damping is on only while settling; a light one
-//! brings a swaying body to the same rest height sooner, a heavy one overdamps it into a creep;
-//! unset, the protocol is the paper's.
+//! The damped settle: the settling damping is on only while settling; a light one brings a
+//! swaying body to the same rest height sooner, a heavy one overdamps it into a creep; unset, the
+//! protocol is the paper's.
 
 use amorph::dynamics::{DynamicScene, Pass, foam_palette};
 use amorph::material::MaterialId;

@@ -1,4 +1,4 @@
-//! Cluster benchmark (issue 4), figures recorded in docs/cluster.md.
+//! Cluster benchmark, figures recorded in docs/how-to/cluster.md.
 //!
 //! - `capacity`: the coordinator alone, every evaluation trivial (workers in `Instant` mode answer
 //!   at once): tasks dispatched and reported per second over loopback with 1, 2 and 8 worker

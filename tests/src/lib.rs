@@ -64,8 +64,17 @@ target = "circular_arc"
     RunConfig::parse(&text, Path::new("small.toml")).expect("valid test config")
 }
 
-/// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process.
+/// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process. Its
+/// search starts from the paper's preset unless `sections` names one, so that a test's keys are
+/// the only operators beyond the paper's.
 pub fn circular_arc(name: &str, seed: u64, results_dir: &Path, sections: &str) -> RunConfig {
+    let sections = if sections.contains("preset =") {
+        sections.to_owned()
+    } else if sections.contains("[search]\n") {
+        sections.replacen("[search]\n", "[search]\npreset = \"paper\"\n", 1)
+    } else {
+        format!("[search]\npreset = \"paper\"\n{sections}")
+    };
     let text = format!(
         "name = \"{name}\"\nseed = {seed}\nresults_dir = \"{dir}\"\n{sections}\n\
          [cluster]\nlocal_workers = 0\n[scene]\nkind = \"beam\"\ntarget = \"circular_arc\"\n",

@@ -1,7 +1,7 @@
 //! A beam design's static deflection as our solver gives it, in the figures a dynamic reader of
-//! the exported VXA can report (docs/exports.md, "What Voxelyze does with our VXA"): the tip
-//! layer's mean deflection and the displacement of the centre of mass, which is all the
-//! VoxCAD-era Voxelyze writes about positions.
+//! the exported VXA can report (docs/how-to/voxelyze.md): the tip layer's mean deflection and the
+//! displacement of the centre of mass, which is all the VoxCAD-era Voxelyze writes about
+//! positions.
 //!
 //! `cargo run --release -p amorph-worker --example beam_deflection -- <genome.json> <scene.toml> <NXxNYxNZ>`
 

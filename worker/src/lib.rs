@@ -128,8 +128,9 @@ fn read(path: &Path) -> Result<String> {
 mod tests {
     use super::*;
 
-    /// Issue 12, item 8: `material: 300` gave "data did not match any variant of untagged enum
-    /// GenomeFile", and a NaN "expected value at line 1 column 27"; neither named the field.
+    /// A bad genome file (`material: 300`, a NaN) is refused naming the field, not with serde's
+    /// "data did not match any variant of untagged enum GenomeFile" or "expected value at line 1
+    /// column 27".
     #[test]
     fn regression_a_bad_genome_file_names_the_field() {
         let dir = std::env::temp_dir().join(format!("amorph-genome-file-{}", std::process::id()));

@@ -135,8 +135,8 @@ fn evaluate_prints_the_same_outcome_on_any_number_of_threads() {
 }
 
 /// A bad key deep in a scene file is refused in one line naming the file, the line and the key,
-/// whether the file is a bare scene table or a run config (before session 33 the worker gave
-/// serde's message with no line at all).
+/// whether the file is a bare scene table or a run config, rather than with serde's message and
+/// no line at all.
 #[test]
 fn a_bad_scene_file_is_refused_at_its_key() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("worker-bad-scene");

@@ -1,11 +1,13 @@
 //! `coordinator --config run.toml`: runs an evolutionary design job on a cluster of workers (by
 //! default, workers inside this process; `worker --connect URL` processes may join at any time).
+//! Without `--config` it runs the quickstart compiled into it.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use amorph_coordinator::RunConfig;
+use amorph_coordinator::config::Override;
 use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
 use amorph_coordinator::progress::Progress;
 use amorph_coordinator::store::RunStore;
@@ -17,9 +19,14 @@ use tracing_subscriber::EnvFilter;
 #[derive(Debug, Parser)]
 #[command(version, about)]
 struct Cli {
-    /// The run configuration (TOML); see configs/ for examples.
-    #[arg(long, required_unless_present = "health_check")]
+    /// The run configuration (TOML); see configs/ for examples. Without it: the quickstart
+    /// (configs/quickstart.toml, compiled in).
+    #[arg(long)]
     config: Option<PathBuf>,
+    /// Overrides one config key, e.g. `--set scene.target=polynomial4` (a dotted key path and a
+    /// TOML value; repeatable, applied in order, recorded in the run's config.toml).
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override, conflicts_with = "health_check")]
+    overrides: Vec<Override>,
     /// Continue the run in <results_dir>/<name>/run.sqlite (after a crash or Ctrl-C). The result is
     /// bit-identical to a run that was never interrupted.
     #[arg(long, conflicts_with_all = ["fresh", "resume_if_present"])]
@@ -45,6 +52,10 @@ struct Cli {
     log: String,
 }
 
+fn parse_override(text: &str) -> Result<Override, String> {
+    text.parse()
+}
+
 fn main() -> std::process::ExitCode {
     // One line per error, causes joined with ': ', so a bad config reads as a single message.
     match try_main(Cli::parse()) {
@@ -67,7 +78,10 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
-    let config = RunConfig::load(cli.config.as_deref().expect("clap requires --config"))?;
+    let config = match &cli.config {
+        Some(path) => RunConfig::load_with(path, &cli.overrides)?,
+        None => RunConfig::quickstart(&cli.overrides)?,
+    };
     let shutdown = Arc::new(AtomicBool::new(false));
     stop_on_signal(shutdown.clone());
     let (tx, rx) = std::sync::mpsc::channel();
@@ -109,13 +123,13 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         .headline(&best.outcome)
         .unwrap_or_else(|| "-".into());
     println!(
-        "{}: best {headline} at {} after {} evaluations in {:.1} s ({:?}); results in {}",
+        "{}: best {headline} at {} after {} evaluations in {:.1} s ({:?}); report in {}",
         config.raw.name,
         summary.dims,
         summary.evaluations,
         summary.wall_seconds,
         summary.stop,
-        config.run_dir().display()
+        config.run_dir().join("report.html").display()
     );
     if summary.unchanged_children > 0 {
         println!(

@@ -163,9 +163,9 @@ mod tests {
         (client.unwrap(), server.unwrap().0)
     }
 
-    /// Issue 12, item 6: idle connections held the coordinator's descriptors for as long as the
-    /// peer liked. Over the per-address limit a connection is refused; an idle one times out;
-    /// closing one gives its place back.
+    /// A peer cannot hold the coordinator's descriptors for as long as it likes: over the
+    /// per-address limit a connection is refused; an idle one times out; closing one gives its
+    /// place back.
     #[tokio::test]
     async fn regression_connections_are_limited_and_idle_ones_time_out() {
         let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();

@@ -168,7 +168,7 @@ pub async fn start(
         .set_service_status("", tonic_health::ServingStatus::Serving)
         .await;
 
-    // Bounds on what one peer can hold open (docs/cluster.md, "Threat model"): streams per
+    // Bounds on what one peer can hold open (docs/reference/protocol.md): streams per
     // connection, header size, and a deadline on every call (a lease waits at most 5 s, so an
     // honest call never comes near it) that also ends requests whose body never finishes.
     let mut builder = Server::builder()

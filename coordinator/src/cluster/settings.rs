@@ -284,8 +284,9 @@ mod tests {
         assert_eq!(s.local_workers, 3, "an explicit count is kept");
     }
 
-    /// Issue 12, item 4: `local_workers = 100000` panicked in the worker pool, and a lease of
-    /// `u64::MAX` ms would panic adding it to an `Instant`; each is now one line naming the key.
+    /// Sizes and durations out of bounds (`local_workers = 100000`, which would panic in the
+    /// worker pool; a lease of `u64::MAX` ms, which would panic added to an `Instant`) are each
+    /// refused in one line naming the key.
     #[test]
     fn regression_sizes_and_durations_out_of_bounds_name_their_key() {
         type Edit = fn(&mut ClusterSection);

@@ -1,6 +1,6 @@
-//! Every refusal at the cluster edge as one gRPC status: the queue's errors, malformed requests
-//! and wire-format errors map here and nowhere else, so a code means the same in every call and
-//! the docs' table (docs/cluster.md) has one source. Peer-supplied text in a message passes
+//! Every refusal at the cluster edge as one gRPC status: the queue's errors, malformed requests and
+//! wire-format errors map here and nowhere else, so a code means the same in every call and the
+//! docs' table (docs/reference/protocol.md) has one source. Peer-supplied text in a message passes
 //! through [`peer_text::clean`] first.
 
 use amorph_proto::PROTOCOL_VERSION;

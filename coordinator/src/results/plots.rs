@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use amorph::export::{PlotSpec, Series, line_plot};
+use amorph::report::{PlotSpec, Series, line_plot};
 use amorph::task::Figure;
 
 use crate::summary::{HistoryRow, RunSummary};

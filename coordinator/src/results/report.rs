@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use amorph::export::{Block, Link, Picture, Report};
+use amorph::report::{Block, Link, Picture, Report};
 use amorph::task::{Artefact, Scene};
 
 use super::finishing::FinerCheck;

@@ -241,7 +241,7 @@ impl ResultWriter {
         for (i, pop) in summary.populations.iter().enumerate() {
             let best = fittest(pop);
             let grid = scene.design(&best.genome, summary.dims);
-            let png = amorph::export::render_isometric(&grid, scene.palette(), 8.0)
+            let png = amorph::report::render_isometric(&grid, scene.palette(), 8.0)
                 .to_png()
                 .map_err(std::io::Error::other)?;
             let name = format!("island-{i}-best.png");

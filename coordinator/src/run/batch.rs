@@ -145,10 +145,18 @@ pub(super) fn evaluate_parts(
     let mut fresh_at = Vec::new();
     for (p, part) in parts.iter().enumerate() {
         for (slot, task) in part.tasks.iter().enumerate() {
-            let stored_outcome = search.replay.remove(&task.id).filter(|s| {
+            // Taken only where it is this task: children bred beside a finest-level check and
+            // dropped by the switch held these task numbers before the re-evaluation that
+            // follows took them, and that re-evaluation must still find its stored outcomes.
+            let matches = search.replay.get(&task.id).is_some_and(|s| {
                 s.resolution == part.resolution
                     && serde_json::to_string(&task.genome).is_ok_and(|g| g == s.genome_json)
             });
+            let stored_outcome = if matches {
+                search.replay.remove(&task.id)
+            } else {
+                None
+            };
             match stored_outcome {
                 Some(s) => {
                     evaluated[p][slot] = Some(Evaluated {

@@ -3,7 +3,6 @@
 //! it happens. What changes the search is in `search.rs`, one batch of evaluations in `batch.rs`.
 
 mod batch;
-pub mod schedule;
 mod search;
 
 use std::sync::Arc;
@@ -115,7 +114,6 @@ pub fn run(
             "epoch done"
         );
         search.switch_if_stalled(config, evaluator, ctx)?;
-        search.split_if_stalled(config);
     };
 
     let dims = schedule.dims(search.resolution.level);

@@ -21,8 +21,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::{IslandId, TaskId};
 use crate::search::{
-    Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest, SplitWatch,
-    first_in_turn, keep_at_least_one, migrate,
+    Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest, first_in_turn,
+    keep_at_least_one, migrate,
 };
 use crate::store::{MigrationRecord, Purpose, StoredEvaluation};
 use crate::summary::fittest;
@@ -52,23 +52,15 @@ pub(super) struct Search {
     replay_epoch_evaluations: HashMap<usize, u64>,
     pub(super) clock: RunClock,
     breeding: Breeding,
-    /// Children each island breeds per epoch: the configured count, times the islands merged
-    /// into one at a resolution switch (`resolution.merge_islands`) or not yet split from one
-    /// (`search.split_after_stall`), so the batch stays the same.
-    children_per_island: usize,
-    /// Islands on demand: when the one population splits into the configured islands.
-    split: SplitWatch,
     /// With `resolution.stall_on_finest`: the last best genome evaluated at the finest level at
     /// this coarse level.
     finest_checked: Option<Genome>,
-    /// The design those checks ranked best, scored at the finest level, with the island that
-    /// held it: its rank is what the stall rule watches, and `resolution.carry_checked_best`
-    /// carries it into the finest level.
-    checked_best: Option<(usize, Individual)>,
+    /// The best rank those checks have given at this level: what the stall rule watches.
+    checked_best: f64,
     /// The level stalled with less budget left than the switch's re-evaluation: the run ends.
     pub(super) switch_unaffordable: bool,
-    /// The next epoch's children, sent out beside a finest-level check
-    /// (`resolution.overlap_finest_checks`) and waiting for the stall rule's verdict.
+    /// The next epoch's children, sent out beside a finest-level check and waiting for the stall
+    /// rule's verdict.
     overlap: Option<Overlap>,
     /// With `search.skip_unchanged`: the parents' designs at this level, to tell the children
     /// that make them.
@@ -101,7 +93,7 @@ impl Search {
         let raw = &config.raw;
         let breeding = Breeding {
             mutation: raw.search.mutation.clone(),
-            variation: raw.search.variation(),
+            local_search: raw.search.local_search.clone(),
             scene,
         };
         let island_rng = |i: usize| {
@@ -112,20 +104,13 @@ impl Search {
         let mut migration_rng = ChaCha8Rng::seed_from_u64(raw.seed);
         migration_rng.set_stream(0);
 
-        // Islands on demand start as one island holding (and breeding for) all of them.
-        let on_demand = raw.search.split_after_stall > 0;
-        let (islands, together) = if on_demand {
-            (1, raw.search.islands)
-        } else {
-            (raw.search.islands, 1)
-        };
-        let mut rngs: Vec<ChaCha8Rng> = (0..islands).map(island_rng).collect();
+        let mut rngs: Vec<ChaCha8Rng> = (0..raw.search.islands).map(island_rng).collect();
         let initial: Vec<Vec<Genome>> = rngs
             .iter_mut()
             .map(|rng| {
                 Island::initial_genomes(
                     rng,
-                    raw.search.population * together,
+                    raw.search.population,
                     raw.search.initial_points,
                     &breeding,
                 )
@@ -152,10 +137,8 @@ impl Search {
                 earlier: ctx.store.recorded_wall_seconds()?,
             },
             breeding,
-            children_per_island: raw.search.children_per_epoch * together,
-            split: SplitWatch::new(raw.search.split_after_stall),
             finest_checked: None,
-            checked_best: None,
+            checked_best: f64::NEG_INFINITY,
             switch_unaffordable: false,
             overlap: None,
             parent_designs: raw.search.skip_unchanged.then(ParentDesigns::default),
@@ -204,8 +187,10 @@ impl Search {
         evaluator: &mut dyn Evaluator,
         ctx: &RunContext<'_>,
     ) -> Result<Vec<usize>> {
-        let combine =
-            (self.breeding.variation.local_search).combining(self.breeding.scene.limits());
+        let local = &self.breeding.local_search;
+        let combine = local
+            .combine
+            .then_some(self.breeding.scene.limits().max_points);
         let (children, genomes, batch) = match self.overlap.take() {
             Some(overlap) if overlap.dims == dims => {
                 overlap.held.keep(self, ctx)?;
@@ -248,7 +233,7 @@ impl Search {
     /// (`local_search.finest_fraction` at the finest).
     pub(super) fn breed_for_level(&mut self, config: &RunConfig) {
         let finest = self.resolution.is_final(&config.raw.resolution);
-        self.breeding.variation.local_search = (config.raw.search.local_search).at_level(finest);
+        self.breeding.local_search = (config.raw.search.local_search).at_level(finest);
     }
 
     /// The children of the next epoch at `dims`, with `spent` evaluations of the budget spent
@@ -276,7 +261,7 @@ impl Search {
         let breeding = &self.breeding;
         // One climb for the whole run: every island nudges the run's best, and the island that
         // holds it (the lowest index on a tie) judges the nudges.
-        let local = &breeding.variation.local_search;
+        let local = &breeding.local_search;
         let shared = (local.shared && local.fraction > 0.0).then(|| {
             let holder = (0..islands)
                 .reduce(|best, i| {
@@ -289,19 +274,9 @@ impl Search {
                 })
                 .expect("a run has islands");
             let slot = self.islands[holder].best_index();
-            let best = &self.islands[holder].population[slot];
-            let genome = best.genome.clone();
-            let site = local.boundary_site(&genome, &best.outcome, &breeding.scene, dims);
-            let holder_id = self.islands[holder].id;
-            (
-                holder,
-                SharedBest {
-                    genome,
-                    slot,
-                    site,
-                    holder: holder_id,
-                },
-            )
+            let genome = self.islands[holder].population[slot].genome.clone();
+            let site = local.boundary_site(&genome, &breeding.scene, dims);
+            (holder, SharedBest { genome, slot, site })
         });
         // Skipping unchanged children, every island breeds its whole share and the budget cuts
         // the children left after the skip (`drop_unchanged`): what an epoch breeds then never
@@ -310,18 +285,18 @@ impl Search {
         let counts: Vec<usize> = (0..islands)
             .map(|i| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
+                let per_island = config.raw.search.children_per_epoch;
                 if skipping {
-                    self.children_per_island
+                    per_island
                 } else {
-                    (self.children_per_island as u64).min(share) as usize
+                    (per_island as u64).min(share) as usize
                 }
             })
             .collect();
-        let nudges = local.nudges_per_island(&counts);
-        let mut children: Vec<Vec<Child>> = (self.islands.iter_mut().enumerate())
-            .map(|(i, island)| {
+        let mut children: Vec<Vec<Child>> = (self.islands.iter_mut().zip(&counts))
+            .map(|(island, &count)| {
                 let best = shared.as_ref().map(|(_, s)| s);
-                island.breed_nudging(counts[i], nudges[i], breeding, dims, best)
+                island.breed(count, breeding, dims, best)
             })
             .collect();
         if let Some((holder, _)) = shared {
@@ -343,9 +318,8 @@ impl Search {
         children
     }
 
-    /// Drops the children whose design is their dominant parent's (`search.skip_unchanged`),
-    /// counting the crossover children among them as tried for the step's adaptation, then all
-    /// but the first `left` of the rest in turn.
+    /// Drops the children whose design is their dominant parent's (`search.skip_unchanged`), then
+    /// all but the first `left` of the rest in turn.
     fn drop_unchanged(&mut self, children: &mut [Vec<Child>], dims: GridDims, left: u64) {
         let designs = self.parent_designs.as_mut().expect("skipping unchanged");
         let unchanged = designs.unchanged(&self.islands, children, &self.breeding.scene, dims);
@@ -353,19 +327,12 @@ impl Search {
             .map(|island| island.iter().map(|&u| !u).collect())
             .collect();
         keep_at_least_one(&mut keep);
-        let mut dropped = 0u64;
-        for ((island, children), (keep, unchanged)) in
-            (self.islands.iter_mut().zip(children.iter())).zip(keep.iter().zip(&unchanged))
-        {
-            let mut crossovers = 0;
-            for ((child, &kept), &same) in children.iter().zip(keep).zip(unchanged) {
-                if same && !kept {
-                    dropped += 1;
-                    crossovers += usize::from(!child.nudge);
-                }
-            }
-            island.count_unchanged(crossovers);
-        }
+        let dropped: u64 = (keep.iter().zip(&unchanged))
+            .map(|(keep, unchanged)| {
+                let dropped = keep.iter().zip(unchanged).filter(|(k, u)| **u && !**k);
+                dropped.count() as u64
+            })
+            .sum();
         self.unchanged_children += dropped;
         if dropped > 0 {
             info!(

@@ -33,8 +33,6 @@ pub struct IslandDiversity {
     pub design_pairwise: f64,
     /// Design distance from the island's best to the run's best.
     pub design_to_run_best: f64,
-    /// The island's mutation step as a multiple of the configured one.
-    pub step_scale: f64,
 }
 
 /// The mean genome distance over all unordered pairs of an island's individuals.
@@ -135,7 +133,6 @@ fn measure_with(
                 best_to_run_best: genome_distance(&island.best().genome, &run_best.genome),
                 design_pairwise,
                 design_to_run_best,
-                step_scale: island.step_scale(),
             }
         })
         .collect()
@@ -145,7 +142,7 @@ fn measure_with(
 /// distances, so that an epoch recomputes only the pairs of the slots whose genome changed. With a
 /// few children per island and epoch most of a population is unchanged, and measuring all pairs
 /// afresh made the coordinator's epoch several times longer than its evaluations at 16 islands
-/// (docs/evolution.md, session 14). The sums are taken over the same pairs in the same order as
+/// (docs/explanation/search.md). The sums are taken over the same pairs in the same order as
 /// [`measure`], so the numbers are the same bits.
 #[derive(Debug, Default)]
 struct IslandCache {
@@ -224,7 +221,7 @@ impl DiversityLog {
         let mut file = BufWriter::new(File::create(run_dir.join("diversity.csv"))?);
         writeln!(
             file,
-            "epoch,evaluations,island,mean_pairwise_distance,best_to_run_best,design_pairwise,design_to_run_best,step_scale"
+            "epoch,evaluations,island,mean_pairwise_distance,best_to_run_best,design_pairwise,design_to_run_best"
         )?;
         file.flush()?;
         Ok(Self {
@@ -270,18 +267,16 @@ impl DiversityLog {
                 best_to_run_best = d.best_to_run_best,
                 design_pairwise = d.design_pairwise,
                 design_to_run_best = d.design_to_run_best,
-                step_scale = d.step_scale,
                 "diversity"
             );
             writeln!(
                 self.file,
-                "{epoch},{evaluations},{},{:.6},{:.6},{:.6},{:.6},{}",
+                "{epoch},{evaluations},{},{:.6},{:.6},{:.6},{:.6}",
                 d.island,
                 d.mean_pairwise,
                 d.best_to_run_best,
                 d.design_pairwise,
                 d.design_to_run_best,
-                d.step_scale
             )?;
         }
         self.file.flush()

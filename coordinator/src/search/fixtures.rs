@@ -53,13 +53,6 @@ pub fn points_at(xs: &[f64]) -> Genome {
     )
 }
 
-/// `base` with point `i` moved by `dx` along the first axis: a nudge of one point.
-pub fn moved(base: &Genome, i: usize, dx: f64) -> Genome {
-    let mut g = base.clone();
-    g.points[i].position[0] += dx;
-    g
-}
-
 /// An island whose slot i holds a one-point genome at `xs[i]` scored `fitness[i]`, with task ids
 /// `100 * island + i` so a test can tell where an individual came from.
 pub fn island(id: u32, xs: &[f64], fitness: &[f64]) -> Island {

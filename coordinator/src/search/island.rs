@@ -15,9 +15,9 @@ use amorph::voxel::GridDims;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use super::combination::Combining;
+use super::combination::combine;
 use super::insertion::BoundarySite;
-use super::variation::Variation;
+use super::variation::LocalSearchParams;
 use crate::ids::{IslandId, TaskId};
 
 /// A member of a population and how it scored.
@@ -48,16 +48,14 @@ pub struct SharedBest {
     pub genome: Genome,
     pub slot: usize,
     pub site: Option<BoundarySite>,
-    /// The island that holds it, which alone breeds its model steps (`local_search.model_steps`).
-    pub holder: IslandId,
 }
 
 /// How an island breeds (shared by all islands of a run).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Breeding {
     pub mutation: MutationParams,
-    /// Policies beyond the paper's operators (all off by default).
-    pub variation: Variation,
+    /// The local climb around the best (off in the paper's search).
+    pub local_search: LocalSearchParams,
     /// The task: its genome limits and palette bound every operator, and boundary insertion
     /// looks at the design a genome makes.
     pub scene: Arc<Scene>,
@@ -68,14 +66,8 @@ pub struct Island {
     pub id: IslandId,
     pub population: Vec<Individual>,
     rng: ChaCha8Rng,
-    /// The mutation step of the next epoch as a multiple of `search.mutation.step` (1 unless the
-    /// step adapts).
-    step_scale: f64,
-    /// Crossover children of the last epoch that replaced their dominant parent, and how many
-    /// there were: the evidence the step adapts to.
-    last_success: (usize, usize),
-    /// The last epoch's improving nudges applied together, offered as the first nudges of the next.
-    combinations: Vec<Genome>,
+    /// The last epoch's improving nudges applied together, offered as the first nudge of the next.
+    combination: Option<Genome>,
 }
 
 impl Island {
@@ -104,24 +96,16 @@ impl Island {
             id,
             population,
             rng,
-            step_scale: 1.0,
-            last_success: (0, 0),
-            combinations: Vec::new(),
+            combination: None,
         }
-    }
-
-    /// The mutation step of the coming epoch as a multiple of the configured one.
-    pub fn step_scale(&self) -> f64 {
-        self.step_scale
     }
 
     /// Breeds `count` children from the current snapshot: two distinct random parents, a cut
     /// plane, the dominant parent, then mutation; the last few are nudges of the best when a local
     /// search is configured (some of them point insertions on the best's design at `dims`, the
-    /// run's current resolution). The mutation step first adapts to the last epoch's success.
-    /// With `shared` (the run's best: its genome, its slot in the island holding it, and its
-    /// boundary), the nudges are of that design and name its slot as their dominant parent; the
-    /// caller hands them to the island that holds it.
+    /// run's current resolution). With `shared` (the run's best: its genome, its slot in the
+    /// island holding it, and its boundary), the nudges are of that design and name its slot as
+    /// their dominant parent; the caller hands them to the island that holds it.
     pub fn breed(
         &mut self,
         count: usize,
@@ -129,61 +113,29 @@ impl Island {
         dims: GridDims,
         shared: Option<&SharedBest>,
     ) -> Vec<Child> {
-        let nudges = breeding.variation.local_search.nudges(count);
-        self.breed_nudging(count, nudges, breeding, dims, shared)
-    }
-
-    /// `breed` with the number of nudges among the `count` children given (at most `count`): a
-    /// shared climb's share can be counted over the whole epoch (`local_search.per_epoch`).
-    pub fn breed_nudging(
-        &mut self,
-        count: usize,
-        nudges: usize,
-        breeding: &Breeding,
-        dims: GridDims,
-        shared: Option<&SharedBest>,
-    ) -> Vec<Child> {
-        let nudges = nudges.min(count);
-        let (replaced, tried) = self.last_success;
-        self.step_scale =
-            breeding
-                .variation
-                .step_adaptation
-                .next_scale(self.step_scale, replaced, tried);
-        self.last_success = (0, 0);
-        let mutation = MutationParams {
-            step: breeding.mutation.step * self.step_scale,
-            ..breeding.mutation.clone()
-        };
+        let local = &breeding.local_search;
+        let nudges = local.nudges(count);
         let mut children: Vec<Child> = (0..count - nudges)
-            .map(|_| self.crossover_child(breeding, &mutation))
+            .map(|_| self.crossover_child(breeding))
             .collect();
-        let local = &breeding.variation.local_search;
         let own;
         let from = match shared {
             Some(shared) => shared,
             None => {
                 let slot = self.best_index();
-                let best = &self.population[slot];
-                let genome = best.genome.clone();
+                let genome = self.population[slot].genome.clone();
                 let site = (nudges > 0)
-                    .then(|| local.boundary_site(&genome, &best.outcome, &breeding.scene, dims))
+                    .then(|| local.boundary_site(&genome, &breeding.scene, dims))
                     .flatten();
-                own = SharedBest {
-                    genome,
-                    slot,
-                    site,
-                    holder: self.id,
-                };
+                own = SharedBest { genome, slot, site };
                 &own
             }
         };
         // The combination judges against this island's own best, whatever `shared` says: the
         // nudges it adds up were judged here, so this island holds their lineage.
-        let mut combined = std::mem::take(&mut self.combinations);
-        combined.truncate(nudges);
-        let offered = combined.len();
-        for genome in combined {
+        let combined = self.combination.take().filter(|_| nudges > 0);
+        let offered = usize::from(combined.is_some());
+        if let Some(genome) = combined {
             children.push(Child {
                 genome,
                 dominant_parent: self.best_index(),
@@ -191,23 +143,7 @@ impl Island {
                 combined: true,
             });
         }
-        // The model's steps replace the first plain nudges, bred once, by the holding island.
-        let steps = match &from.site {
-            Some(site) if from.holder == self.id && local.model_steps > 0 => {
-                site.model_step_children(&from.genome, &breeding.scene, local.model_steps)
-            }
-            _ => Vec::new(),
-        };
-        let stepped = steps.len().min(nudges - offered);
-        for genome in steps.into_iter().take(stepped) {
-            children.push(Child {
-                genome,
-                dominant_parent: from.slot,
-                nudge: true,
-                combined: false,
-            });
-        }
-        for _ in offered + stepped..nudges {
+        for _ in offered..nudges {
             let mut genome = from.genome.clone();
             local.step_from_best(
                 &mut genome,
@@ -225,7 +161,7 @@ impl Island {
         children
     }
 
-    fn crossover_child(&mut self, breeding: &Breeding, mutation: &MutationParams) -> Child {
+    fn crossover_child(&mut self, breeding: &Breeding) -> Child {
         let n = self.population.len();
         let a = self.rng.random_range(0..n);
         let b = if n > 1 {
@@ -234,14 +170,7 @@ impl Island {
         } else {
             a
         };
-        let across = &breeding.variation.crossover;
-        // The draw is skipped when the option is off, so the paper's search keeps its RNG stream.
-        let plane =
-            if across.across_probability > 0.0 && self.rng.random_bool(across.across_probability) {
-                CutPlane::across(&mut self.rng, across.axis)
-            } else {
-                CutPlane::random(&mut self.rng)
-            };
+        let plane = CutPlane::random(&mut self.rng);
         let cross = crossover(
             &self.population[a].genome,
             &self.population[b].genome,
@@ -252,7 +181,7 @@ impl Island {
         mutate(
             &mut genome,
             &mut self.rng,
-            mutation,
+            &breeding.mutation,
             breeding.scene.limits(),
             breeding.scene.palette().len(),
         );
@@ -288,28 +217,23 @@ impl Island {
     }
 
     /// Applies an epoch's evaluated children in order ([`Island::winners`]). Returns how many
-    /// replaced their dominant parent. With `combine` (`local_search.combine`), also adds up the
-    /// nudges `combine_by` picks, for the next epoch.
+    /// replaced their dominant parent. With `combine` (`local_search.combine`, the genome's point
+    /// limit), also adds up the epoch's improving nudges for the next epoch.
     pub fn apply(
         &mut self,
         children: Vec<Child>,
         outcomes: Vec<(TaskId, Outcome)>,
-        combine: Option<Combining>,
+        combine: Option<usize>,
     ) -> usize {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
         let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
         let wins = self.winners(&children, &refs);
-        self.combinations = combine.map_or_else(Vec::new, |combining| {
-            self.combine_nudges(&children, &refs, &wins, &combining)
-        });
+        self.combination =
+            combine.and_then(|max_points| self.combine_improving(&children, &refs, max_points));
         let mut replaced = 0;
         for ((child, (task, outcome)), wins) in children.into_iter().zip(outcomes).zip(wins) {
             if child.combined {
                 info!(island = %self.id, won = wins, "combined nudges judged");
-            }
-            if !child.nudge {
-                self.last_success.1 += 1;
-                self.last_success.0 += usize::from(wins);
             }
             if wins {
                 self.population[child.dominant_parent] = Individual {
@@ -323,11 +247,33 @@ impl Island {
         replaced
     }
 
-    /// Counts crossover children of this epoch that were not evaluated because they make their
-    /// dominant parent's design (`search.skip_unchanged`): tried, and they did not replace it, so
-    /// the adapted step is what it would have been had they been evaluated.
-    pub fn count_unchanged(&mut self, crossovers: usize) {
-        self.last_success.1 += crossovers;
+    /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
+    /// their dominant parent's slot, before any child of the epoch is applied), fittest first
+    /// (child order on a tie), added up by [`combine`].
+    fn combine_improving(
+        &self,
+        children: &[Child],
+        outcomes: &[&Outcome],
+        max_points: usize,
+    ) -> Option<Genome> {
+        let mut improving: Vec<(usize, &Child)> = (children.iter().enumerate())
+            .filter(|(k, c)| {
+                c.nudge
+                    && !c.combined
+                    && outcomes[*k].is_fitter_than(&self.population[c.dominant_parent].outcome)
+            })
+            .collect();
+        // Nudges of one epoch share one base (the island's best, or the run's under `shared`).
+        let slot = improving.first().map(|(_, c)| c.dominant_parent)?;
+        improving.retain(|(_, c)| c.dominant_parent == slot);
+        // A stable sort, so ties keep child order.
+        improving.sort_by(|(a, _), (b, _)| outcomes[*b].rank().total_cmp(&outcomes[*a].rank()));
+        let genomes: Vec<&Genome> = improving.iter().map(|(_, c)| &c.genome).collect();
+        let combined = combine(&self.population[slot].genome, &genomes, max_points);
+        if combined.is_some() {
+            info!(island = %self.id, improving = genomes.len(), "improving nudges combined");
+        }
+        combined
     }
 
     /// Index of the fittest individual (the lowest index on a tie).
@@ -374,6 +320,5 @@ impl Island {
     }
 }
 
-mod combining;
 #[cfg(test)]
 mod tests;

@@ -227,7 +227,7 @@ fn integrate_lanes<A: Regroup>(arith: A, st: VoxelState, dt: f64) -> Integration
 }
 
 /// `[f(0), f(1), f(2)]`, written out: `array::map` is left to the optimizer's judgement, and
-/// where it was not inlined its closures lost the vector instructions (docs/dynamics.md).
+/// where it was not inlined its closures lost the vector instructions.
 #[inline(always)]
 fn three<T>(f: impl Fn(usize) -> T) -> [T; 3] {
     [f(0), f(1), f(2)]

@@ -6,7 +6,7 @@
 //! `f64` lanes) and, wrapped in [`super::single_lanes::Single`], in single precision (eight `f32`
 //! lanes). Explicit vectors make the vector code a property of the source: left to the optimizer,
 //! a change as small as removing a bounds check turned the whole kernel back into scalar code
-//! (docs/dynamics.md, "Speed"). Both use only IEEE addition, subtraction, multiplication and
+//! (docs/explanation/physics.md). Both use only IEEE addition, subtraction, multiplication and
 //! division per lane, besides sign flips and selects, never a fused multiply-add, so they give the
 //! same bits.
 
@@ -300,7 +300,7 @@ impl Regroup for pulp::x86::V3 {
 }
 
 /// `[f(0), …, f(L − 1)]`, always inlined: `std::array::from_fn` is left to the optimizer's
-/// judgement, and where it was not inlined (eight lanes, docs/dynamics.md "Mixed precision") the
+/// judgement, and where it was not inlined (eight lanes, as the mixed-precision kernel uses) the
 /// kernel around it lost its vector code.
 #[inline(always)]
 pub fn lane_array<T: Copy + Default, const L: usize>(mut f: impl FnMut(usize) -> T) -> [T; L] {

@@ -250,7 +250,7 @@ pub(super) struct LinkConstants<'a, E> {
 /// arithmetic enabled. The job goes by reference and is moved out inside: `pulp` passes an
 /// operation of more than eight words another way, which lost the inlined vector code, and a
 /// kernel that reached its slices through a reference reloaded them at every use (together 1.7
-/// times slower: docs/dynamics.md).
+/// times slower).
 struct LinkPass<'a, 'b, A: Arith<L>, S, O, const L: usize, const DAMPED: bool, const ACTUATED: bool>
 {
     arith: A,

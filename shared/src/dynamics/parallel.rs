@@ -25,7 +25,7 @@ const VOXEL_GRAIN: usize = 128;
 
 /// The part size for `n` items on the current pool: two parts per thread, so that a thread slowed
 /// by other work on its core can hand part of its share to the others (1, 2, 4 and 8 parts per
-/// thread measured alike within this machine's noise: docs/dynamics.md), but no part smaller than
+/// thread measured alike within the build machine's noise), but no part smaller than
 /// `least`; a multiple of four.
 fn grain(n: usize, least: usize) -> usize {
     n.div_ceil(2 * rayon::current_num_threads())

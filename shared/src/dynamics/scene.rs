@@ -46,7 +46,7 @@ pub struct DynamicScene {
     pub link_precision: LinkPrecision,
 }
 
-/// How the link kernel computes (docs/dynamics.md, "Mixed precision"). Either way the state is
+/// How the link kernel computes (docs/explanation/physics.md). Either way the state is
 /// `f64`, integrated in `f64`, and a result is the same bits on any x86-64 CPU and any number of
 /// threads.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -101,9 +101,9 @@ pub struct Floor {
     pub downhill: f64,
     /// Whether an actuated voxel meets the floor at its actuated size (its underside moves with
     /// its swelling, so a swelling foot pushes the body up), as Voxelyze's floor does, rather than
-    /// at its rest size. Default false, the contact of every result before it (docs/dynamics.md,
-    /// "Floor contact at the actuated size"); not written when false, so earlier scenes encode
-    /// to the same bytes.
+    /// at its rest size. Default false, the contact of every result before it
+    /// (docs/how-to/voxelyze.md); not written when false, so earlier scenes encode to the same
+    /// bytes.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub actuated_contact: bool,
     /// The friction law at the floor. Default `sticking`, the law of every result before it; not
@@ -112,8 +112,7 @@ pub struct Floor {
     pub friction: FrictionLaw,
 }
 
-/// How a voxel on the floor changes between sticking and sliding (docs/dynamics.md, "Model",
-/// the floor).
+/// How a voxel on the floor changes between sticking and sliding (docs/explanation/physics.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FrictionLaw {

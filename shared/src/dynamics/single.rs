@@ -6,7 +6,7 @@
 //! from the origin has a spacing of 1.9·10⁻⁹ m, so an `f32` integration would lose the motion. A
 //! link only needs the difference of its two ends' positions, their orientations, and (damped)
 //! their velocities and spins; rounding those to `f32` moves a random robot's gait 7–40 times
-//! less than halving the time step does (docs/dynamics.md, "Measured in session 30"). The copy
+//! less than halving the time step does (docs/explanation/physics.md). The copy
 //! holds positions relative to voxel 0 (`SingleCopy::copy_state`), so that a body far from the
 //! origin loses no more than one near it: the kernel is translation-invariant to `f64` rounding.
 //!
@@ -15,7 +15,7 @@
 //! same bits, and each group's forces and moments are widened to `f64` (exact) and added to the
 //! voxels four links at a time in link order, as the double kernel adds its own. So the result is
 //! the same bits for any thread count and any x86-64 CPU, as before; it differs from the double
-//! kernel's by the rounding measured in docs/dynamics.md.
+//! kernel's by the rounding measured in docs/explanation/physics.md.
 
 use super::lanes::{Arith, LANES, Lanes, Portable, Regroup, load_columns3, load_columns4};
 use super::link::{Job, LinkConstants, LinkStep};

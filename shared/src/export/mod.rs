@@ -1,40 +1,29 @@
 //! Fabrication exports of a design (paper §III-D and §IV-C): closed per-material surface meshes as
 //! binary STL and a multi-material 3MF for printing, VXA for VoxCAD/Voxelyze, and SVG laser-cut layers.
 
-pub mod animation;
 pub mod layers;
 mod merge;
 pub mod mesh;
-pub mod plot;
 pub mod print;
-pub mod recording;
-pub mod render;
-pub mod report;
 pub mod scaling;
 pub mod smooth;
 pub mod stl;
 pub mod threemf;
-pub mod trajectory;
 pub mod voxcraft;
 pub mod vxa;
 
-pub use animation::{AnimationError, AnimationOptions, animation_gif, write_locomotion_animation};
 pub use layers::{Contour, alignment_holes_mm, layer_contours, layer_svg};
 pub use mesh::{TriangleMesh, boundary_mesh};
-pub use plot::{PlotSpec, Series, line_plot, line_plot_over};
 pub use print::{PrintError, PrintPitch, Slicer, write_slice_stack};
-pub use recording::{LocomotionRecording, RecordingOptions, Sample, record_locomotion};
-pub use render::{Image, render_isometric};
-pub use report::{Block, Link, Picture, Report};
 pub use scaling::{PhysicalBuild, dynamic_actuation_force, equivalent_actuation_period};
 pub use smooth::{SampledField, isosurface, samples_per_voxel, smooth_material_meshes};
 pub use stl::{read_binary_stl, write_binary_stl};
 pub use threemf::{package_3mf, write_3mf};
-pub use trajectory::{trajectory_csv, trajectory_plot};
 pub use voxcraft::{write_voxcraft_base, write_vxd};
 pub use vxa::{VxaDesign, VxaError, read_vxa, write_vxa};
 
 use crate::material::MaterialId;
+use crate::report::render_isometric;
 use crate::voxel::VoxelGrid;
 
 /// The closed surface of each material's voxels, in millimetres (index = material id), with
@@ -88,7 +77,8 @@ pub fn write_fabrication_files(
     let settings = scene.simulator_settings(grid.dims(), outcome);
     // Our simulation lowers a body onto its floor; the simulators that read these files drop it
     // from where its grid puts it, so a body whose lowest voxels sit three layers up fell 6 mm,
-    // tumbled and walked the other way there (docs/exports.md). They get the body on the floor.
+    // tumbled and walked the other way there (docs/how-to/voxelyze.md). They get the body on the
+    // floor.
     let simulated = VxaDesign {
         grid: match &settings {
             Some(s) if s.scene.floor.is_some() => resting_on_floor(grid),

@@ -3,16 +3,17 @@
 //! base's `<Structure>`. voxcraft-sim (the GPU successor of Voxelyze) merges each `.vxd` into the
 //! base by the path in each child's `replace` attribute, then reads the result as a VXA.
 //!
-//! What its reader means, from its source (voxcraft/voxcraft-sim at dd8668f; docs/exports.md):
-//! the temperature is `TempAmplitude`·sin(2π(t/`TempPeriod` + phase)), with no base temperature and
-//! no growth past rest size unless `<Simulator><EnableExpansion>` is set; an edge is s(1 + CTE·T),
-//! linear as in the VoxCAD-era reader; a material's thermal expansion can wait
-//! (`TurnOnThermalExpansionAfterThisManySeconds`) and the reference centre of mass can be taken
-//! later (`ReinitializeInitialPositionAfterThisManySeconds`, read only with `SecondaryExperiment`),
-//! which together are our settle; the stop condition and the fitness are expression trees of
-//! `t` and of the centre of mass's offset (`x`, `y`, `z`). Poisson's ratio enters its links only
-//! with `VolumeEffectsEnabled` (else ν = 0, shear modulus E/2), so it is written as our coupling
-//! switch: our default (no coupling, ν in the shear modulus only) has no exact counterpart there.
+//! What its reader means, from its source (voxcraft/voxcraft-sim at dd8668f;
+//! docs/how-to/voxelyze.md): the temperature is `TempAmplitude`·sin(2π(t/`TempPeriod` + phase)),
+//! with no base temperature and no growth past rest size unless `<Simulator><EnableExpansion>` is
+//! set; an edge is s(1 + CTE·T), linear as in the VoxCAD-era reader; a material's thermal expansion
+//! can wait (`TurnOnThermalExpansionAfterThisManySeconds`) and the reference centre of mass can be
+//! taken later (`ReinitializeInitialPositionAfterThisManySeconds`, read only with
+//! `SecondaryExperiment`), which together are our settle; the stop condition and the fitness are
+//! expression trees of `t` and of the centre of mass's offset (`x`, `y`, `z`). Poisson's ratio
+//! enters its links only with `VolumeEffectsEnabled` (else ν = 0, shear modulus E/2), so it is
+//! written as our coupling switch: our default (no coupling, ν in the shear modulus only) has no
+//! exact counterpart there.
 
 use std::fmt::Write;
 
@@ -29,7 +30,7 @@ const STRUCTURE_PATH: &str = "VXA.VXC.Structure";
 
 /// `base.vxa`: everything but the design. The fitness is the centre of mass's travel along +x
 /// (m) from the end of the settle to the stop, the closest the reader's fitness expression
-/// comes to our steady-gait fitness (docs/exports.md).
+/// comes to our steady-gait fitness (docs/how-to/voxelyze.md).
 pub fn write_voxcraft_base(
     palette: &Palette,
     voxel_size: f64,
@@ -83,7 +84,8 @@ pub fn write_voxcraft_base(
 /// A design's `.vxd`: its structure, to replace the base's. Every voxel's actuation phase offset
 /// and cilia forces are written (all zero: our actuation is in phase), because the reader's
 /// import reads these per-voxel arrays whether or not the file has them, and without them it
-/// reads uninitialised memory (found with its parser built for the CPU, docs/exports.md).
+/// reads uninitialised memory (found with its parser built for the CPU,
+/// docs/how-to/voxelyze.md).
 pub fn write_vxd(grid: &VoxelGrid) -> String {
     let d = grid.dims();
     let blocks = [

@@ -2,14 +2,15 @@
 //! materials and, for a dynamic scene, the simulation and environment settings, so an evolved robot
 //! opens in VoxCAD and runs in Voxelyze.
 //!
-//! The settings are written the way the VoxCAD-era Voxelyze reader reads them (docs/exports.md,
-//! measured with that reader built from `evosoro/_voxcad`): it actuates by thermal expansion, an
-//! edge of s(1 + CTE·ΔT·sin(2πt/T)) with ΔT = `TempAmp` − `TempBase` (so both are written, 1 and
-//! 0, with the newer `TempAmplitude` = 1 beside them); it lets no voxel grow past its rest size
-//! unless `GrowthAmplitude` allows it; its only settle is `InitCmTime`, before which nothing
-//! actuates and from which travel is measured, with the sine's phase counted from t = 0 (so every
-//! voxel gets the `PhaseOffset` that puts our phase at the settle's end); and its bond damping
-//! ratio is ours scaled by 2/√14 (its ratio refers to one bond, ours to the lattice's top mode).
+//! The settings are written the way the VoxCAD-era Voxelyze reader reads them
+//! (docs/how-to/voxelyze.md, measured with that reader built from `evosoro/_voxcad`): it actuates
+//! by thermal expansion, an edge of s(1 + CTE·ΔT·sin(2πt/T)) with ΔT = `TempAmp` − `TempBase` (so
+//! both are written, 1 and 0, with the newer `TempAmplitude` = 1 beside them); it lets no voxel
+//! grow past its rest size unless `GrowthAmplitude` allows it; its only settle is `InitCmTime`,
+//! before which nothing actuates and from which travel is measured, with the sine's phase counted
+//! from t = 0 (so every voxel gets the `PhaseOffset` that puts our phase at the settle's end); and
+//! its bond damping ratio is ours scaled by 2/√14 (its ratio refers to one bond, ours to the
+//! lattice's top mode).
 
 use std::fmt::Write;
 

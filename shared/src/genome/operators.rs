@@ -147,7 +147,8 @@ pub fn perturb<R: Rng + ?Sized>(
 /// Moves every continuous parameter of `count` distinct points drawn at random (all of them when
 /// the genome has fewer) by a Gaussian step of `step` times the parameter's range. A nudge that
 /// moves one point changes one region of the design, so near a good design it is far likelier to
-/// improve it than the same step spread over every point (docs/evolution.md measures both).
+/// improve it than the same step spread over every point (docs/explanation/search.md measures
+/// both).
 pub fn perturb_points<R: Rng + ?Sized>(
     genome: &mut Genome,
     rng: &mut R,
@@ -228,16 +229,6 @@ impl CutPlane {
                 };
             }
         }
-    }
-
-    /// A plane across one axis: origin uniform in the workspace, normal along `axis` with a random
-    /// sign. Across the beam's length (y) it gives a child one parent's root and the other's tip,
-    /// the split a profile along the beam is made of.
-    pub fn across<R: Rng + ?Sized>(rng: &mut R, axis: usize) -> Self {
-        let origin = [rng.random(), rng.random(), rng.random()];
-        let mut normal = [0.0; 3];
-        normal[axis] = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-        Self { origin, normal }
     }
 
     /// True on the side the normal points to (points on the plane count as this side).
@@ -346,22 +337,5 @@ mod tests {
             at_edge.count() > 0,
             "steps of half a range do reach the edges"
         );
-    }
-
-    #[test]
-    fn a_plane_across_an_axis_has_that_axis_as_its_normal() {
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let mut signs = [0, 0];
-        for _ in 0..100 {
-            let plane = CutPlane::across(&mut rng, 1);
-            assert_eq!(plane.normal[0], 0.0);
-            assert_eq!(plane.normal[2], 0.0);
-            assert_eq!(plane.normal[1].abs(), 1.0);
-            signs[usize::from(plane.normal[1] > 0.0)] += 1;
-            // Which side a point is on depends on y alone.
-            let y = plane.origin[1] + 0.01 * plane.normal[1];
-            assert!(plane.is_front([0.0, y, 1.0]) && plane.is_front([1.0, y, 0.0]));
-        }
-        assert!(signs[0] > 20 && signs[1] > 20, "both signs: {signs:?}");
     }
 }

@@ -3,8 +3,9 @@
 //! Every filled voxel is a node with six DOF; every face-adjacent pair is an Euler–Bernoulli
 //! frame element ([`StaticModel`]). [`solve`] removes the fixed nodes, assembles the free nodes'
 //! stiffness in 6×6 block sparse form and solves `K u = f` directly (faer's sparse Cholesky) or by
-//! preconditioned conjugate gradients, as [`StaticSolverParams`] chooses. See `docs/statics.md`
-//! for the model, the measured solver comparison and the accuracy tests.
+//! preconditioned conjugate gradients, as [`StaticSolverParams`] chooses. See
+//! `docs/explanation/physics.md` for the model, the measured solver comparison and the accuracy
+//! tests.
 
 mod amg;
 mod bsr;

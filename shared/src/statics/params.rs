@@ -77,7 +77,7 @@ pub struct StaticSolverParams {
     /// tens, block Jacobi thousands).
     pub max_iterations: usize,
     /// `Auto` solves directly up to this many free unknowns (6 per free node), by PCG above
-    /// (default 6000, from the measured crossover in `docs/statics.md`).
+    /// (default 6000, from the measured crossover in `docs/explanation/physics.md`).
     pub auto_direct_max_dof: usize,
     /// PCG preconditioner (default multigrid).
     pub preconditioner: Preconditioner,

@@ -14,7 +14,7 @@ pub const DEFAULT_FRACTION: f64 = 0.5;
 
 /// Estimated peak bytes of evaluating a design of `dims` in `scene`.
 pub fn estimate(scene: &Scene, dims: GridDims) -> u64 {
-    // Each task states its measured peak per voxel (docs/cluster.md, "Memory budget").
+    // Each task states its measured peak per voxel (docs/how-to/cluster.md).
     let per_voxel = scene.bytes_per_voxel();
     let voxels = (dims.nx as u64)
         .saturating_mul(dims.ny as u64)
@@ -97,9 +97,10 @@ mod tests {
         }
     }
 
-    /// Issue 12, item 5: a 1024x1024x8 task made a real worker try to allocate 13.3 GB and
-    /// abort. The estimate grows with the voxel count and refuses it under a budget smaller than
-    /// what it asked for, while the paper's beam passes a small one.
+    /// A task too large for the memory budget is refused before it starts, rather than making
+    /// the worker try to allocate (13.3 GB for a 1024x1024x8 beam) and abort. The estimate grows
+    /// with the voxel count and refuses it under a budget smaller than what it would ask for,
+    /// while the paper's beam passes a small one.
     #[test]
     fn regression_an_evaluation_over_budget_is_refused_before_it_starts() {
         let beam: Scene = toml::from_str("kind = \"beam\"\ntarget = \"straight\"").unwrap();

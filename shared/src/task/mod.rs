@@ -11,7 +11,6 @@
 pub mod beam;
 pub mod cantilever;
 mod error;
-mod flip_model;
 mod kindless;
 pub mod locomotion;
 pub mod memory;
@@ -25,13 +24,12 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 pub use error::SceneError;
-pub use flip_model::FlipModel;
 
 use crate::dynamics::DynamicScene;
-use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
 use crate::material::Palette;
 use crate::outcome::Failure;
+use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, voxelize};
 
 /// The figure a task's progress is followed by (history, progress plots): its name as a CSV
@@ -88,12 +86,8 @@ pub trait Task {
     /// Whether the task has a stop target (`budget.target_rms_percent`), see [`Task::meets_target`].
     const HAS_TARGET: bool;
     /// Peak memory of an evaluation per voxel of the resolution, bytes, measured and rounded up
-    /// (docs/cluster.md, "Memory budget"), so a worker refuses a task it could not finish.
+    /// (docs/how-to/cluster.md), so a worker refuses a task it could not finish.
     const BYTES_PER_VOXEL: u64;
-    /// Whether the fitness is minus a sum of squared residuals that [`Task::residuals`] gives.
-    const HAS_RESIDUALS: bool = false;
-    /// Whether [`Task::flip_model`] gives a model.
-    const HAS_FLIP_MODEL: bool = false;
 
     /// Checks every field, naming the first bad one.
     fn validate(&self) -> Result<(), SceneError>;
@@ -126,22 +120,6 @@ pub trait Task {
         metrics: &Self::Metrics,
         dims: GridDims,
     ) -> Result<(), String>;
-    /// The terms whose squares, summed, are minus the fitness, each with the position it is
-    /// measured at (a station along a beam): what a least-squares search can model, since the
-    /// residuals of a small change add up where fitnesses do not. `None` unless
-    /// [`Task::HAS_RESIDUALS`].
-    fn residuals(_metrics: &Self::Metrics) -> Option<Vec<[f64; 2]>> {
-        None
-    }
-    /// How single-voxel changes of `design` (kept, evaluated to `metrics`) are expected to move
-    /// the fitness; `None` unless [`Task::HAS_FLIP_MODEL`], or where the model cannot be built.
-    fn flip_model<'a>(
-        &'a self,
-        _design: &'a VoxelGrid,
-        _metrics: &'a Self::Metrics,
-    ) -> Option<Box<dyn FlipModel + 'a>> {
-        None
-    }
     /// One line for progress and logs.
     fn headline(&self, metrics: &Self::Metrics) -> String;
     /// The value of [`Task::FIGURE`] for a design.
@@ -332,26 +310,6 @@ macro_rules! tasks {
                 }
             }
 
-            /// Whether the task's fitness is a sum of squared residuals ([`Task::residuals`]).
-            pub fn has_residuals(&self) -> bool {
-                match self { $(Scene::$variant(_) => <$scene as Task>::HAS_RESIDUALS),+ }
-            }
-
-            /// Whether the task models single-voxel changes ([`Task::flip_model`]).
-            pub fn has_flip_model(&self) -> bool {
-                match self { $(Scene::$variant(_) => <$scene as Task>::HAS_FLIP_MODEL),+ }
-            }
-
-            /// The task's model of single-voxel changes to `design`, evaluated to `outcome`
-            /// (`None` for a failure, another task's metrics, or a task without one).
-            pub fn flip_model<'a>(&'a self, design: &'a VoxelGrid, outcome: &'a Outcome) -> Option<Box<dyn FlipModel + 'a>> {
-                match (self, outcome.metrics()?) {
-                    $((Scene::$variant(s), Metrics::$variant(m)) => s.flip_model(design, m),)+
-                    #[allow(unreachable_patterns)]
-                    _ => None,
-                }
-            }
-
             /// Whether the task has a stop target (`budget.target_rms_percent`).
             pub fn has_target(&self) -> bool {
                 match self { $(Scene::$variant(_) => <$scene as Task>::HAS_TARGET),+ }
@@ -411,13 +369,6 @@ macro_rules! tasks {
                         s.simulator_settings(dims, m)
                     }),+
                 }
-            }
-        }
-
-        impl Metrics {
-            /// The task's residuals of these metrics ([`Task::residuals`]).
-            pub fn residuals(&self) -> Option<Vec<[f64; 2]>> {
-                match self { $(Metrics::$variant(m) => <$scene as Task>::residuals(m)),+ }
             }
         }
     };

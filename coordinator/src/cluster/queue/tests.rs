@@ -81,8 +81,8 @@ fn an_expired_lease_is_redispatched_and_the_late_report_counts_once() {
     assert_eq!(q.heartbeat(b, &[T1], later).unwrap().0, [T1]);
 }
 
-/// Issue 12, item 2: a late report for a re-queued task was accepted but left the task queued,
-/// so it was leased again and a second (possibly forged) outcome replaced the first.
+/// A late report for a re-queued task is final: the task leaves the queue, so it is never leased
+/// again and no second (possibly forged) outcome can replace the first.
 #[test]
 fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
     let q = TaskQueue::new(rules());
@@ -111,8 +111,8 @@ fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
     assert_eq!(q.stats().queued, 0);
 }
 
-/// Issue 12, items 2 and 3: three errors for one task in one `Report` marked it failed, yet it
-/// was leased again; and one worker could fail a task alone.
+/// Errors repeated by one worker for one task (as three in one `Report`) count once: one worker
+/// cannot fail a task alone, and the task is not leased again to the worker that failed it.
 #[test]
 fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
     let q = TaskQueue::new(rules());
@@ -297,8 +297,8 @@ fn released_tasks_go_back_to_the_front() {
     assert_eq!(ids(&q.lease(b, 2, t0).unwrap().0), [1, 2]);
 }
 
-/// Issue 12, item 8: a report for a task of an earlier batch that was never leased to the
-/// reporter was answered DUPLICATE; it is a report for a task the worker never had.
+/// A report for a task of an earlier batch that was never leased to the reporter is refused as a
+/// task the worker never had, not answered as a duplicate.
 #[test]
 fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
     let q = TaskQueue::new(rules());
@@ -326,9 +326,9 @@ fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
     assert!(leased.is_empty() && finished);
 }
 
-/// Issue 12, item 6: a worker that names its leases in every heartbeat kept them for ever (one
-/// held all 95 queued tasks, starving an honest worker). A lease now ends `max_lease` after its
-/// grant; a late outcome from the hoarder would still count if it came first.
+/// A lease ends `max_lease` after its grant however often its holder names it in a heartbeat,
+/// so a worker cannot hoard tasks (all of a queue's) and starve an honest one; a late outcome from
+/// the hoarder would still count if it came first.
 #[test]
 fn regression_heartbeats_cannot_keep_a_lease_past_its_lifetime() {
     let q = TaskQueue::new(rules());
@@ -364,9 +364,9 @@ fn check_task(n: u64) -> Task {
     }
 }
 
-/// Issue 12, item 3: a check of a worker's claim is never evaluated by that worker; once no other
-/// worker may take it, the coordinator takes it (`orphan_checks`), so a check never waits for a
-/// worker that cannot come. Outcomes say whose word they are.
+/// A check of a worker's claim is never evaluated by that worker; once no other worker may take
+/// it, the coordinator takes it (`orphan_checks`), so a check never waits for a worker that cannot
+/// come. Outcomes say whose word they are.
 #[test]
 fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it() {
     let q = TaskQueue::new(rules());
@@ -463,8 +463,8 @@ fn delivering_an_outcome_counts_as_asking_for_work() {
     );
 }
 
-/// Issue 12, item 3: a quarantined worker loses its leases to the queue and every later call of
-/// its is refused, so it can neither report nor hold work.
+/// A quarantined worker loses its leases to the queue and every later call of its is refused, so
+/// it can neither report nor hold work.
 #[test]
 fn a_quarantined_worker_loses_its_leases_and_is_refused() {
     let q = TaskQueue::new(rules());
@@ -492,9 +492,9 @@ fn a_quarantined_worker_loses_its_leases_and_is_refused() {
     assert!(q.is_quarantined(liar) && !q.is_quarantined(honest));
 }
 
-/// Issue 12, item 6: registrations were unbounded (each a few hundred bytes until dropped as
-/// silent). At most MAX_WORKERS outside workers are registered at once; the coordinator's own
-/// trusted workers are never shut out, and room comes back as silent workers are dropped.
+/// Registrations are bounded (each holds a few hundred bytes until dropped as silent): at most
+/// MAX_WORKERS outside workers are registered at once; the coordinator's own trusted workers are
+/// never shut out, and room comes back as silent workers are dropped.
 #[test]
 fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
     let q = TaskQueue::new(rules());
@@ -519,8 +519,8 @@ fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
 
 #[test]
 fn regression_the_server_closes_only_when_every_worker_has_heard_the_run_finished() {
-    // A worker between two calls when the run ended used to find the port closed, retry until it
-    // gave up and exit with an error: the run must stay reachable until it has been told.
+    // A worker between two calls when the run ends must not find the port closed, retry until it
+    // gives up and exit with an error: the run stays reachable until it has been told.
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     let leaser = q.register("leaser", 1, false, t0).unwrap();

@@ -1,7 +1,8 @@
 //! The coarse level judged on the finest grid (`resolution.stall_on_finest`): the check of the
-//! run's best at the finest level, and the next epoch's children sent out beside it
-//! (`resolution.overlap_finest_checks`), kept if the level goes on and dropped without a trace if
-//! the check ends it.
+//! run's best at the finest level, and the next epoch's children sent out beside it, kept if the
+//! level goes on and dropped without a trace if the check ends it. The children do not depend on
+//! the check, so the results are the same bits as checking alone; the workers the single check
+//! would leave idle evaluate them meanwhile.
 
 use amorph::genome::Genome;
 use amorph::voxel::GridDims;
@@ -12,13 +13,13 @@ use super::super::{Result, RunContext};
 use super::{Search, genomes_of};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
-use crate::search::{Child, Individual, Island};
+use crate::search::{Child, Island};
 use crate::store::Purpose;
 use crate::verification::{self, Evaluated};
 
 /// Children bred and evaluated ahead of their epoch, beside a check at the finest level that does
 /// not change them. The epoch takes them if it comes at this level; a switch drops them, and with
-/// them every trace of their breeding: the islands (random streams, step adaptation) and the task
+/// them every trace of their breeding: the islands (random streams, combinations) and the task
 /// numbers go back to what they were, and their outcomes were never stored or counted.
 pub(super) struct Overlap {
     pub(super) dims: GridDims,
@@ -36,9 +37,8 @@ pub(super) struct Overlap {
 impl Search {
     /// Evaluates the run's best at the finest level when it is not the genome checked last
     /// (and the budget has room for it), as the task of the island holding it; returns the best
-    /// rank the checks at this level have given. With `resolution.overlap_finest_checks` the
-    /// next epoch's children go out with the check, so the workers the single check leaves idle
-    /// evaluate them meanwhile; they wait in `overlap` for the stall rule's verdict.
+    /// rank the checks at this level have given. The next epoch's children go out with the
+    /// check and wait in `overlap` for the stall rule's verdict.
     pub(super) fn check_on_finest(
         &mut self,
         config: &RunConfig,
@@ -51,37 +51,28 @@ impl Search {
             .expect("the run's best is an island's best");
         let affordable = (config.raw.budget.evaluations).is_none_or(|max| self.evaluations < max);
         if !affordable || self.finest_checked.as_ref() == Some(&best.genome) {
-            return Ok(self.finest_best());
+            return Ok(self.checked_best);
         }
         let mut genomes = vec![Vec::new(); island + 1];
         genomes[island].push(best.genome.clone());
         let schedule = &config.raw.resolution;
         let finest = schedule.finest();
         let mut parts = vec![Part::number(self, &genomes, finest, Purpose::FinestCheck)];
-        let ahead = schedule.overlap_finest_checks.then(|| {
-            let dims = schedule.dims(self.resolution.level);
-            let islands_before = self.islands.clone();
-            let next_task_before = self.next_task;
-            let unchanged_before = self.unchanged_children;
-            // The check is part of the budget the children share.
-            let children = self.breed_children(config, dims, self.evaluations + 1);
-            let genomes = genomes_of(&children);
-            let before = (islands_before, next_task_before, unchanged_before);
-            (dims, children, genomes, before)
-        });
-        if let Some((dims, _, genomes, ..)) = &ahead {
-            parts.push(Part::number(self, genomes, *dims, Purpose::Child));
-        }
+        let dims = schedule.dims(self.resolution.level);
+        let islands_before = self.islands.clone();
+        let next_task_before = self.next_task;
+        let unchanged_before = self.unchanged_children;
+        // The check is part of the budget the children share.
+        let children = self.breed_children(config, dims, self.evaluations + 1);
+        let ahead = genomes_of(&children);
+        parts.push(Part::number(self, &ahead, dims, Purpose::Child));
         let (mut batches, held) = evaluate_parts(self, evaluator, parts, 1, ctx)?;
-        if let (Some((dims, children, genomes, before)), Some(held)) =
-            (ahead, held.into_iter().next())
-        {
-            let (islands_before, next_task_before, unchanged_before) = before;
+        if let Some(held) = held.into_iter().next() {
             let batch = batches.pop().expect("the children's part");
             self.overlap = Some(Overlap {
                 dims,
                 children,
-                genomes,
+                genomes: ahead,
                 batch,
                 held,
                 islands_before,
@@ -98,27 +89,17 @@ impl Search {
             ctx,
             &verification::all_decide,
         )?;
-        let (task, outcome) = &outcomes[island][0];
+        let (_, outcome) = &outcomes[island][0];
         info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %finest, "the run's best checked at the finest level");
         let genome = genomes
             .swap_remove(island)
             .pop()
             .expect("the checked genome");
-        if outcome.rank() > self.finest_best() {
-            let design = Individual {
-                genome: genome.clone(),
-                outcome: outcome.clone(),
-                task: *task,
-            };
-            self.checked_best = Some((island, design));
+        if outcome.rank() > self.checked_best {
+            self.checked_best = outcome.rank();
         }
         self.finest_checked = Some(genome);
-        Ok(self.finest_best())
-    }
-
-    /// The best rank the checks at this level have given.
-    fn finest_best(&self) -> f64 {
-        (self.checked_best.as_ref()).map_or(f64::NEG_INFINITY, |(_, d)| d.outcome.rank())
+        Ok(self.checked_best)
     }
 
     /// Forgets children bred ahead of their epoch as if they had never been bred.
@@ -127,22 +108,4 @@ impl Search {
         self.next_task = overlap.next_task_before;
         self.unchanged_children = overlap.unchanged_before;
     }
-}
-
-/// Puts `design`, already scored at the level `island` has just been re-evaluated at, in place of
-/// the island's worst individual, unless the island holds it already (its re-evaluation gave the
-/// same bits) or it is not fitter than that worst. Returns the slot it took.
-pub(super) fn carry_checked(island: &mut Island, design: Individual) -> Option<usize> {
-    if island.population.iter().any(|i| i.genome == design.genome) {
-        return None;
-    }
-    let worst = island.worst_index();
-    if !design
-        .outcome
-        .is_fitter_than(&island.population[worst].outcome)
-    {
-        return None;
-    }
-    island.population[worst] = design;
-    Some(worst)
 }

@@ -70,10 +70,10 @@ fn a_failed_child_never_replaces_and_any_evaluated_child_replaces_a_failed_paren
 
 const DIMS: GridDims = GridDims::new(6, 20, 6);
 
-fn breeding(variation: Variation) -> Breeding {
+fn breeding(local_search: LocalSearchParams) -> Breeding {
     Breeding {
         mutation: MutationParams::default(),
-        variation,
+        local_search,
         scene: Arc::new(
             toml::from_str("kind = \"beam\"\ntarget = \"circular_arc\"").expect("a beam"),
         ),
@@ -86,15 +86,12 @@ fn nudges_are_the_best_with_only_continuous_parameters_moved() {
     let mut best = random_genome(isl.rng_mut(), 30, &GenomeLimits::default(), 2);
     best.points[0].material = amorph::material::MaterialId(1);
     isl.population[1].genome = best.clone();
-    let b = breeding(Variation {
-        local_search: LocalSearchParams {
-            fraction: 0.5,
-            points: 0,
-            probability: 1.0,
-            step: 0.01,
-            insertion: 0.0,
-            ..Default::default()
-        },
+    let b = breeding(LocalSearchParams {
+        fraction: 0.5,
+        points: 0,
+        probability: 1.0,
+        step: 0.01,
+        insertion: 0.0,
         ..Default::default()
     });
     let children = isl.breed(6, &b, DIMS, None);
@@ -122,19 +119,15 @@ fn nudges_are_the_best_with_only_continuous_parameters_moved() {
 fn shared_nudges_start_from_the_run_best_not_the_island_best() {
     let mut isl = island(0, &[0.1, 0.2, 0.3], &[-1.0, -5.0, -3.0]);
     let run_best = random_genome(isl.rng_mut(), 30, &GenomeLimits::default(), 2);
-    let b = breeding(Variation {
-        local_search: LocalSearchParams {
-            fraction: 0.5,
-            shared: true,
-            ..Default::default()
-        },
+    let b = breeding(LocalSearchParams {
+        fraction: 0.5,
+        shared: true,
         ..Default::default()
     });
     let shared = SharedBest {
         genome: run_best.clone(),
         slot: 7,
         site: None,
-        holder: IslandId(9),
     };
     let children = isl.breed(4, &b, DIMS, Some(&shared));
     for c in &children[..2] {
@@ -164,12 +157,9 @@ fn a_point_nudge_moves_exactly_the_chosen_points_and_nothing_else() {
     let best = random_genome(isl.rng_mut(), 30, &GenomeLimits::default(), 2);
     isl.population[1].genome = best.clone();
     for points in [1, 3, 40] {
-        let b = breeding(Variation {
-            local_search: LocalSearchParams {
-                fraction: 1.0,
-                points,
-                ..Default::default()
-            },
+        let b = breeding(LocalSearchParams {
+            fraction: 1.0,
+            points,
             ..Default::default()
         });
         for c in isl.breed(8, &b, DIMS, None) {
@@ -227,28 +217,13 @@ fn improving_nudges_return_added_up_as_the_next_epochs_first_nudge() {
             ],
         )
     };
-    let b = breeding(Variation {
-        local_search: LocalSearchParams {
-            fraction: 1.0,
-            combine: true,
-            ..Default::default()
-        },
+    let b = breeding(LocalSearchParams {
+        fraction: 1.0,
+        combine: true,
         ..Default::default()
     });
     let (children, outcomes) = epoch();
-    assert_eq!(
-        isl.apply(
-            children,
-            outcomes,
-            b.variation
-                .local_search
-                .combining(&amorph::genome::GenomeLimits {
-                    max_points: 64,
-                    ..Default::default()
-                })
-        ),
-        1
-    );
+    assert_eq!(isl.apply(children, outcomes, Some(64)), 1);
     let next = isl.breed(3, &b, DIMS, None);
     let first = &next[0];
     assert!(first.nudge && first.combined);
@@ -267,36 +242,4 @@ fn improving_nudges_return_added_up_as_the_next_epochs_first_nudge() {
     let (children, outcomes) = epoch();
     isl.apply(children, outcomes, None);
     assert!(isl.breed(3, &b, DIMS, None).iter().all(|c| !c.combined));
-}
-
-#[test]
-fn the_step_adapts_to_crossover_children_only() {
-    use crate::search::variation::{StepAdaptation, StepRule};
-    let mut isl = island(0, &[0.1, 0.2], &[-5.0, -3.0]);
-    let b = breeding(Variation {
-        step_adaptation: StepAdaptation {
-            rule: StepRule::OneFifth,
-            ..Default::default()
-        },
-        ..Default::default()
-    });
-    // 1 of 2 crossover children succeeds (50 % > 1/5); a successful nudge does not count.
-    let mut nudge = child(1, 0.3);
-    nudge.nudge = true;
-    isl.apply(
-        vec![child(0, 0.9), child(1, 0.8), nudge],
-        vec![
-            (TaskId(1), scored(-4.0)),
-            (TaskId(2), scored(-9.0)),
-            (TaskId(3), scored(-0.5)),
-        ],
-        None,
-    );
-    isl.breed(1, &b, DIMS, None);
-    assert_eq!(isl.step_scale(), 1.2);
-    // Then an epoch with only failures shrinks it back.
-    let children = vec![child(0, 0.1)];
-    isl.apply(children, vec![(TaskId(4), failed())], None);
-    isl.breed(1, &b, DIMS, None);
-    assert_eq!(isl.step_scale(), 1.0);
 }

@@ -2,7 +2,6 @@
 
 mod custom;
 mod evaluate;
-mod flip_model;
 mod report;
 mod scene;
 mod target;
@@ -11,18 +10,15 @@ use std::path::Path;
 
 pub use custom::{CustomProfile, Interpolation, MAX_PROFILE_POINTS, TargetError};
 pub use evaluate::simulate_beam;
-pub use flip_model::BeamFlipModel;
 pub use scene::{BeamMetrics, BeamScene};
 pub use target::{NamedProfile, TargetProfile};
 
 use super::cantilever::check_cantilever_dims;
-use super::{
-    Artefact, Figure, FlipModel, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome,
-};
+use super::{Artefact, Figure, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome};
 use crate::dynamics::DynamicScene;
-use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
 use crate::material::Palette;
+use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
 
 impl Task for BeamScene {
@@ -34,8 +30,6 @@ impl Task for BeamScene {
         log: true,
     };
     const HAS_TARGET: bool = true;
-    const HAS_RESIDUALS: bool = true;
-    const HAS_FLIP_MODEL: bool = true;
     /// The static solve held 11.2 kB per voxel from 12x48x12 to 32x96x32.
     const BYTES_PER_VOXEL: u64 = 16 << 10;
 
@@ -91,28 +85,19 @@ impl Task for BeamScene {
         report::check_metrics(self, fitness, metrics, dims)
     }
 
-    /// Each station after the clamp: its position and its normalized deflection less the
-    /// target's (the fitness sums their squares, `report::check_metrics`).
-    fn residuals(m: &BeamMetrics) -> Option<Vec<[f64; 2]>> {
-        Some(
-            m.profile
-                .iter()
-                .skip(1)
-                .map(|&[t, w, target]| [t, w - target])
-                .collect(),
-        )
-    }
-
-    fn flip_model<'a>(
-        &'a self,
-        design: &'a VoxelGrid,
-        metrics: &'a BeamMetrics,
-    ) -> Option<Box<dyn FlipModel + 'a>> {
-        BeamFlipModel::new(self, design, metrics).map(|m| Box::new(m) as Box<dyn FlipModel>)
-    }
-
+    /// The error to four significant figures, so that a value just under the paper's reads as
+    /// under it, with the paper's value beside it where the paper has one.
     fn headline(&self, m: &BeamMetrics) -> String {
-        format!("RMS {:.3} %", m.rms_percent)
+        let rms = m.rms_percent;
+        let decimals = if rms > 0.0 && rms.is_finite() {
+            (3 - rms.log10().floor() as i32).clamp(0, 8) as usize
+        } else {
+            3
+        };
+        match self.target.paper_rms_percent() {
+            Some(paper) => format!("RMS {rms:.decimals$} % (paper {paper:.2} %)"),
+            None => format!("RMS {rms:.decimals$} %"),
+        }
     }
 
     fn figure(&self, m: &BeamMetrics) -> f64 {
@@ -142,7 +127,7 @@ impl Task for BeamScene {
     }
 
     /// The cantilever in free space, no gravity, the link damping of the dynamics' default, with
-    /// the tip load; a reader relaxes it to rest (VXA exports, docs/exports.md).
+    /// the tip load; a reader relaxes it to rest (VXA exports, docs/how-to/export.md).
     fn simulator_settings(
         &self,
         dims: GridDims,

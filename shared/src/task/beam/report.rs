@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::scene::{BeamMetrics, BeamScene};
-use crate::export::{Block, PlotSpec, Series, line_plot};
+use crate::report::{Block, PlotSpec, Series, line_plot};
 use crate::task::Artefact;
 use crate::task::error::counts_fit;
 use crate::voxel::GridDims;

@@ -1,26 +1,32 @@
 //! The walking-robot task (paper §IV): genome → voxels → the largest body settled on the floor and
 //! actuated → fitness = the centre of mass's steady travel along the heading.
 
+mod animation;
 mod protocol;
+mod recording;
 mod report;
 mod scene;
 mod starts;
+mod trajectory;
 
 use std::path::Path;
 
+pub use animation::{AnimationError, AnimationOptions, animation_gif, write_locomotion_animation};
 pub use protocol::{
     LocomotionFitness, LocomotionOutcome, LocomotionPhase, LocomotionProtocol, LocomotionStatus,
     SettleRule, simulate_locomotion, simulate_locomotion_observed,
 };
+pub use recording::{LocomotionRecording, RecordingOptions, Sample, record_locomotion};
 pub use report::PAPER_SPEED_PERCENT_PER_CYCLE;
 pub use scene::{LocomotionMetrics, LocomotionScene};
 pub use starts::Starts;
+pub use trajectory::{trajectory_csv, trajectory_plot};
 
 use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
-use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
 use crate::material::Palette;
 use crate::outcome::Failure;
+use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_largest_component};
 
 impl Task for LocomotionScene {

@@ -133,9 +133,9 @@ pub struct SettleRule {
     /// The global damping ratio (`dynamics.damping.global`, of each voxel's own critical
     /// damping) while settling, the scene's own applying again when actuation starts; `None`
     /// (the default) settles with the scene's own, as the paper's protocol does. Not on by
-    /// default because no one value settles every body sooner: measured (docs/dynamics.md,
-    /// "Damped settling"), ζ = 0.1 saves 20 % of the steps over six random 20³ robots and 8 %
-    /// over twenty at 10³, but overdamps the slow sway of a thin overhang into a creep that
+    /// default because no one value settles every body sooner: measured
+    /// (docs/explanation/physics.md), ζ = 0.1 saves 20 % of the steps over six random 20³ robots
+    /// and 8 % over twenty at 10³, but overdamps the slow sway of a thin overhang into a creep that
     /// settles 5× later than link damping alone; ζ = 0.005 settles that overhang sooner but
     /// doubles the settle of some robots.
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -4,13 +4,13 @@
 
 use std::path::Path;
 
+use super::animation::{AnimationOptions, write_locomotion_animation};
+use super::recording::RecordingOptions;
 use super::scene::{LocomotionMetrics, LocomotionScene};
 use super::starts::Starts;
-use crate::export::{
-    AnimationOptions, Block, RecordingOptions, trajectory_csv, trajectory_plot,
-    write_locomotion_animation,
-};
+use super::trajectory::{trajectory_csv, trajectory_plot};
 use crate::genome::Genome;
+use crate::report::Block;
 use crate::task::Artefact;
 use crate::task::error::counts_fit;
 use crate::voxel::GridDims;

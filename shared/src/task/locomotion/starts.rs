@@ -2,13 +2,13 @@
 //! fraction of a period later, and the median start scored.
 //!
 //! Why: a walking gait is a chaotic contact problem. Measured on evolved 10³ robots
-//! (docs/exports.md), switching the actuation on 7 µs later (10⁻⁴ of the 0.07 s period) moves the
-//! travel of one design by up to a factor of five, more than most fitness differences the search
-//! ranks; so a single start rewards the lucky draw, and a design evolved that way may walk far in
-//! one simulator at one time step and not in another. The median start is a design's typical gait,
-//! and the fitness stays one real simulation's (the median start's), so the reported trace, the
-//! pictures and the exported files describe a run that happened. An odd count makes the median one
-//! start.
+//! (docs/explanation/physics.md), switching the actuation on 7 µs later (10⁻⁴ of the 0.07 s period)
+//! moves the travel of one design by up to a factor of five, more than most fitness differences the
+//! search ranks; so a single start rewards the lucky draw, and a design evolved that way may walk
+//! far in one simulator at one time step and not in another. The median start is a design's typical
+//! gait, and the fitness stays one real simulation's (the median start's), so the reported trace,
+//! the pictures and the exported files describe a run that happened. An odd count makes the median
+//! one start.
 
 use serde::{Deserialize, Serialize};
 
@@ -25,7 +25,7 @@ pub struct Starts {
     /// at the paper's 0.07 s): imperceptible to a robot, yet far enough apart that the starts
     /// are different draws of the gait; at 1e-4 neighbouring starts of a 10³ robot often
     /// agree within 1 % and the median ranks designs little better than one start
-    /// (docs/evolution.md, "Several starts").
+    /// (docs/explanation/search.md).
     pub shift: f64,
 }
 

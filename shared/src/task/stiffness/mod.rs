@@ -14,9 +14,9 @@ pub use scene::{StiffnessMetrics, StiffnessScene};
 
 use super::cantilever::check_cantilever_dims;
 use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
-use crate::export::Block;
 use crate::genome::{Genome, GenomeLimits};
 use crate::material::Palette;
+use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
 
 impl Task for StiffnessScene {

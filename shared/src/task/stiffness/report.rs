@@ -2,7 +2,7 @@
 
 use super::evaluate::{fitness, reference_deflection};
 use super::scene::{StiffnessMetrics, StiffnessScene};
-use crate::export::Block;
+use crate::report::Block;
 use crate::task::error::counts_fit;
 use crate::voxel::GridDims;
 

@@ -1,0 +1,385 @@
+//! The island-model cluster. The same config and seed give bit-identical final
+//! populations whatever evaluates them: one process, one gRPC worker, two, two of which one is
+//! killed mid-run, or workers that join late. Hostile peers get clear errors and change nothing.
+
+use std::time::Duration;
+
+use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
+use amorph_proto::v1::{self, task_result};
+use amorph_proto::{PROTOCOL_VERSION, convert};
+use amorph_tests::{
+    ClusterRun, TestWorker, fingerprint, run_locally, scratch_dir, small_beam_config,
+};
+use tonic::Code;
+
+const EVALUATIONS: u64 = 240;
+const SEED: u64 = 7;
+
+/// The in-process run every cluster run must match, computed once per test process.
+fn reference() -> String {
+    static REFERENCE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    REFERENCE
+        .get_or_init(|| {
+            fingerprint(&run_locally(
+                &small_beam_config(&scratch_dir("cluster-reference"), EVALUATIONS, SEED),
+                2,
+            ))
+        })
+        .clone()
+}
+
+#[test]
+fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
+    let expected = reference();
+
+    let config = small_beam_config(&scratch_dir("cluster-one"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let worker = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(summary.evaluations, EVALUATIONS);
+    assert_eq!(fingerprint(&summary), expected, "one worker");
+    assert!(worker.join().unwrap().evaluated > 0);
+
+    let config = small_beam_config(&scratch_dir("cluster-two"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let a = TestWorker::start(&run.url(), 1, None);
+    let b = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), expected, "two workers");
+    let (a, b) = (a.join().unwrap(), b.join().unwrap());
+    assert!(
+        a.evaluated > 0 && b.evaluated > 0,
+        "both worked: {a:?} {b:?}"
+    );
+
+    // Kill one worker mid-run: its leases expire and go to the survivor.
+    let config = small_beam_config(&scratch_dir("cluster-killed"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let survivor = TestWorker::start(&run.url(), 1, None);
+    let victim = TestWorker::start(&run.url(), 2, None);
+    run.wait_for_evaluations(EVALUATIONS / 3, Duration::from_secs(120));
+    victim.kill();
+    let summary = run.join();
+    assert_eq!(summary.evaluations, EVALUATIONS);
+    assert_eq!(fingerprint(&summary), expected, "a worker killed mid-run");
+    assert!(survivor.join().is_ok());
+}
+
+#[test]
+fn a_worker_that_connects_late_joins_the_run() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("cluster-late"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let early = TestWorker::start(&run.url(), 1, None);
+    run.wait_for_evaluations(EVALUATIONS / 4, Duration::from_secs(120));
+    let late = TestWorker::start(&run.url(), 1, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), expected);
+    assert!(early.join().unwrap().evaluated > 0);
+    assert!(
+        late.join().unwrap().evaluated > 0,
+        "the late worker got work"
+    );
+}
+
+#[test]
+fn regression_a_worker_between_two_calls_hears_that_the_run_finished() {
+    // CI once saw a late worker, between two calls when the run ended, find the port closed
+    // and retry for 60 s before failing. A worker that heartbeats slower than the run's last
+    // moments must still be answered `run_finished`, not a closed connection.
+    let config = small_beam_config(&scratch_dir("cluster-farewell"), 60, SEED);
+    let run = ClusterRun::start(&config, 2, None);
+    let rt = runtime();
+    let heard = rt.block_on(async {
+        let mut c = client(&run.url()).await;
+        let worker_id = c
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: 1,
+                name: "bystander".into(),
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .worker_id;
+        for beat in 0.. {
+            // Under the config's 600 ms worker timeout, so the coordinator keeps it registered.
+            tokio::time::sleep(Duration::from_millis(250)).await;
+            let answer = c
+                .heartbeat(v1::HeartbeatRequest {
+                    worker_id: worker_id.clone(),
+                    active_task_ids: Vec::new(),
+                    protocol_version: PROTOCOL_VERSION,
+                })
+                .await
+                .unwrap_or_else(|e| panic!("heartbeat {beat}: {e:?}"));
+            if answer.into_inner().run_finished {
+                return beat;
+            }
+            assert!(beat < 2_000, "no end of the run after {beat} heartbeats");
+        }
+        unreachable!()
+    });
+    assert_eq!(run.join().evaluations, 60);
+    assert!(heard > 0);
+}
+
+#[test]
+fn embedded_local_workers_follow_the_queue_rules_bit_for_bit() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("cluster-local"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 2, None);
+    assert_eq!(fingerprint(&run.join()), expected);
+}
+
+#[test]
+fn a_wrong_token_or_protocol_version_is_refused_and_the_run_goes_on() {
+    let config = small_beam_config(&scratch_dir("cluster-auth"), 60, SEED);
+    let run = ClusterRun::start(&config, 0, Some("s3cret"));
+
+    let intruder = TestWorker::start(&run.url(), 1, Some("guess"));
+    let err = intruder.join().unwrap_err().to_string();
+    assert!(err.contains("Unauthenticated"), "{err}");
+    let anonymous = TestWorker::start(&run.url(), 1, None);
+    let err = anonymous.join().unwrap_err().to_string();
+    assert!(err.contains("Unauthenticated"), "{err}");
+
+    let rt = runtime();
+    let status = rt.block_on(async {
+        let mut client = client(&run.url()).await;
+        let mut request = tonic::Request::new(v1::RegisterRequest {
+            protocol_version: PROTOCOL_VERSION + 1,
+            capacity: 1,
+            name: "future".into(),
+        });
+        request
+            .metadata_mut()
+            .insert("authorization", "Bearer s3cret".parse().unwrap());
+        client.register(request).await.unwrap_err()
+    });
+    assert_eq!(status.code(), Code::FailedPrecondition);
+    assert!(status.message().contains("protocol version"), "{status:?}");
+
+    let honest = TestWorker::start(&run.url(), 1, Some("s3cret"));
+    let summary = run.join();
+    assert_eq!(summary.evaluations, 60);
+    assert!(honest.join().unwrap().evaluated == 60);
+}
+
+#[test]
+fn hostile_messages_get_clear_errors_and_lose_nothing() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("cluster-hostile"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let rt = runtime();
+    rt.block_on(async {
+        let mut c = client(&run.url()).await;
+        let id = c
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: 2,
+                name: "hostile".into(),
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .worker_id;
+        let report = |worker: &str, task_id: u64, result: task_result::Result| v1::ReportRequest {
+            worker_id: worker.into(),
+            results: vec![v1::TaskResult {
+                task_id,
+                result: Some(result),
+                wall_seconds: 0.0,
+            }],
+        };
+        let empty = convert::outcome_to_wire(&amorph::task::Outcome::failed(
+            amorph::outcome::Failure::Empty,
+        ));
+
+        // A probe's lease (long-polling until the first batch is queued) makes sure task 1
+        // exists before it is reported: without it the report raced the first submit and could
+        // get NOT_FOUND instead of FAILED_PRECONDITION.
+        let probe = c
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: 1,
+                name: "probe".into(),
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .worker_id;
+        let mut probed = Vec::new();
+        while probed.is_empty() {
+            probed = c
+                .lease(v1::LeaseRequest {
+                    worker_id: probe.clone(),
+                    max_tasks: 1,
+                    wait_ms: 1000,
+                })
+                .await
+                .unwrap()
+                .into_inner()
+                .tasks;
+        }
+        assert_eq!(probed[0].task_id, 1);
+
+        // Unknown task id; a task that exists but was never leased to us; an unknown worker.
+        let s = c
+            .report(report(
+                &id,
+                999_999,
+                task_result::Result::Outcome(empty.clone()),
+            ))
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound, "{s:?}");
+        assert!(s.message().contains("999999"), "{s:?}");
+        let s = c
+            .report(report(&id, 1, task_result::Result::Outcome(empty.clone())))
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
+        assert!(s.message().contains("never leased"), "{s:?}");
+        let s = c
+            .heartbeat(v1::HeartbeatRequest {
+                worker_id: "w1-forged".into(),
+                active_task_ids: vec![],
+                protocol_version: PROTOCOL_VERSION,
+            })
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound, "{s:?}");
+
+        // Lease two tasks, answer one with a NaN fitness and one with garbage metrics: both are
+        // refused as this worker's errors and go back to the queue.
+        let tasks = c
+            .lease(v1::LeaseRequest {
+                worker_id: id.clone(),
+                max_tasks: 2,
+                wait_ms: 2000,
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .tasks;
+        assert_eq!(tasks.len(), 2);
+        let nan = v1::Outcome {
+            result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
+                fitness: f64::NAN,
+                metrics_json: b"{}".to_vec(),
+            })),
+        };
+        let garbage = v1::Outcome {
+            result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
+                fitness: -1.0,
+                metrics_json: b"\xff\xfe".to_vec(),
+            })),
+        };
+        let reply = c
+            .report(v1::ReportRequest {
+                worker_id: id.clone(),
+                results: vec![
+                    v1::TaskResult {
+                        task_id: tasks[0].task_id,
+                        result: Some(task_result::Result::Outcome(nan)),
+                        wall_seconds: f64::NAN,
+                    },
+                    v1::TaskResult {
+                        task_id: tasks[1].task_id,
+                        result: Some(task_result::Result::Outcome(garbage)),
+                        wall_seconds: 1.0,
+                    },
+                ],
+            })
+            .await
+            .unwrap()
+            .into_inner();
+        assert_eq!(
+            reply.dispositions,
+            vec![v1::ReportDisposition::Rejected as i32; 2]
+        );
+
+        // An oversized message is refused by the size limit before any handler runs.
+        let huge = v1::ReportRequest {
+            worker_id: id.clone(),
+            results: vec![v1::TaskResult {
+                task_id: tasks[0].task_id,
+                result: Some(task_result::Result::Error(
+                    "x".repeat(amorph_proto::MAX_MESSAGE_BYTES + 1),
+                )),
+                wall_seconds: 0.0,
+            }],
+        };
+        // One defined status: the server refuses it from the length prefix, before reading it.
+        let s = c.report(huge).await.unwrap_err();
+        assert_eq!(s.code(), Code::OutOfRange, "{s:?}");
+        assert!(s.message().contains("too large"), "{s:?}");
+        // A scene that is not the run's.
+        let s = c
+            .fetch_scene(v1::FetchSceneRequest {
+                worker_id: id.clone(),
+                scene_id: "scene-0000".into(),
+            })
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound);
+    });
+
+    // The run goes on with an honest worker and ends exactly as the reference: nothing the
+    // hostile peer did changed a result or lost a task.
+    let honest = TestWorker::start(&run.url(), 2, None);
+    let summary = run.join();
+    assert_eq!(fingerprint(&summary), expected);
+    assert!(honest.join().is_ok());
+}
+
+fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap()
+}
+
+async fn client(url: &str) -> EvaluationCoordinatorClient<tonic::transport::Channel> {
+    EvaluationCoordinatorClient::connect(url.to_owned())
+        .await
+        .unwrap()
+        .max_encoding_message_size(2 * amorph_proto::MAX_MESSAGE_BYTES)
+}
+
+#[test]
+fn tls_with_a_token_runs_and_plain_http_is_refused() {
+    let dir = scratch_dir("cluster-tls");
+    let key = rcgen::generate_simple_self_signed(vec!["localhost".to_owned()]).unwrap();
+    let cert_path = dir.join("cert.pem");
+    let key_path = dir.join("key.pem");
+    std::fs::write(&cert_path, key.cert.pem()).unwrap();
+    std::fs::write(&key_path, key.signing_key.serialize_pem()).unwrap();
+    let mut config = small_beam_config(&dir, 60, SEED);
+    config.raw.cluster.tls_cert = Some(cert_path.clone());
+    config.raw.cluster.tls_key = Some(key_path);
+
+    // No local worker: the external TLS worker must do every evaluation, so the run cannot end
+    // before it has connected. (With a local worker the run could finish first; the TLS worker,
+    // then refused at the closed port, failed after its 60 s of retries once local workers stopped
+    // holding the run open for the reaper at the finish.)
+    let run = ClusterRun::start(&config, 0, Some("s3cret"));
+    let mut plain = amorph_worker::WorkerOptions::new(run.url(), 1);
+    plain.token = Some("s3cret".into());
+    plain.give_up_after = Some(Duration::from_secs(2));
+    plain.max_backoff = Duration::from_millis(200);
+    let plain = TestWorker::with_options(plain);
+    let mut opts = amorph_worker::WorkerOptions::new(format!("https://{}", run.addr), 1);
+    opts.token = Some("s3cret".into());
+    opts.ca_cert = Some(cert_path);
+    opts.tls_domain = Some("localhost".into());
+    opts.give_up_after = Some(Duration::from_secs(60));
+    let secure = TestWorker::with_options(opts);
+    let summary = run.join();
+    assert_eq!(summary.evaluations, 60);
+    assert!(secure.join().is_ok());
+    // Plain HTTP/2 against a TLS server never gets through: the worker gives up, having done nothing.
+    let err = plain.join().unwrap_err().to_string();
+    assert!(err.contains("unreachable"), "{err}");
+}

@@ -1,0 +1,514 @@
+//! Hostile and faulty peers. Each attack is made with a raw gRPC client holding the
+//! run's token against a real coordinator; the coordinator must answer with the documented
+//! status, keep serving, and end the run exactly as a clean run ends.
+
+use std::time::{Duration, Instant};
+
+use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
+use amorph_proto::v1::{self, task_result};
+use amorph_proto::{PROTOCOL_VERSION, convert};
+use amorph_tests::{
+    ClusterRun, TestWorker, fingerprint, run_locally, scratch_dir, small_beam_config,
+};
+use tonic::Code;
+use tonic::transport::Channel;
+
+const EVALUATIONS: u64 = 120;
+const SEED: u64 = 12;
+
+type Client = EvaluationCoordinatorClient<Channel>;
+
+/// The clean run every attacked run must end equal to, computed once per test process (the tests
+/// run in parallel and would otherwise share its results folder).
+fn reference() -> String {
+    static REFERENCE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    REFERENCE
+        .get_or_init(|| {
+            fingerprint(&run_locally(
+                &small_beam_config(&scratch_dir("hostile-reference"), EVALUATIONS, SEED),
+                2,
+            ))
+        })
+        .clone()
+}
+
+fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap()
+}
+
+async fn client(url: &str) -> Client {
+    EvaluationCoordinatorClient::connect(url.to_owned())
+        .await
+        .unwrap()
+        .max_encoding_message_size(2 * amorph_proto::MAX_MESSAGE_BYTES)
+}
+
+async fn register(c: &mut Client, capacity: u32, name: &str) -> String {
+    c.register(v1::RegisterRequest {
+        protocol_version: PROTOCOL_VERSION,
+        capacity,
+        name: name.into(),
+    })
+    .await
+    .unwrap()
+    .into_inner()
+    .worker_id
+}
+
+/// Leases until `n` tasks are held (the first batch may not be queued yet): waits for
+/// readiness with the lease call's own long poll, never a blind sleep.
+async fn lease(c: &mut Client, worker: &str, n: usize) -> Vec<v1::Task> {
+    let start = Instant::now();
+    let mut tasks = Vec::new();
+    while tasks.len() < n {
+        assert!(start.elapsed() < Duration::from_secs(30), "no work in 30 s");
+        tasks.extend(
+            c.lease(v1::LeaseRequest {
+                worker_id: worker.into(),
+                max_tasks: (n - tasks.len()) as u32,
+                wait_ms: 1000,
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .tasks,
+        );
+    }
+    tasks
+}
+
+/// Waits until the coordinator has dropped `worker` as silent (and so re-queued its leases):
+/// `Release` answers NOT_FOUND then, and unlike every other call does not count as a sign of
+/// life.
+async fn wait_until_dropped(c: &mut Client, worker: &str) {
+    let start = Instant::now();
+    loop {
+        let r = c
+            .release(v1::ReleaseRequest {
+                worker_id: worker.into(),
+                task_ids: vec![],
+            })
+            .await;
+        match r {
+            Err(s) if s.code() == Code::NotFound => return,
+            _ => assert!(start.elapsed() < Duration::from_secs(30), "never dropped"),
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
+fn report(worker: &str, task_id: u64, result: task_result::Result) -> v1::ReportRequest {
+    v1::ReportRequest {
+        worker_id: worker.into(),
+        results: vec![v1::TaskResult {
+            task_id,
+            result: Some(result),
+            wall_seconds: 0.0,
+        }],
+    }
+}
+
+/// The honest outcome of a leased task, computed here as a worker would.
+async fn evaluate(c: &mut Client, task: &v1::Task) -> v1::Outcome {
+    let scene = c
+        .fetch_scene(v1::FetchSceneRequest {
+            worker_id: String::new(),
+            scene_id: task.scene_id.clone(),
+        })
+        .await
+        .unwrap()
+        .into_inner();
+    let scene = convert::scene_from_wire(&scene.scene_json).unwrap();
+    let genome = convert::genome_from_wire(task.genome.as_ref().unwrap()).unwrap();
+    let dims = convert::dims_from_wire(task.resolution.as_ref()).unwrap();
+    convert::outcome_to_wire(&scene.evaluate(&genome, dims))
+}
+
+fn forged() -> v1::Outcome {
+    v1::Outcome {
+        result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
+            fitness: 0.0,
+            metrics_json: b"{}".to_vec(),
+        })),
+    }
+}
+
+/// An outcome is a claim checked against what the run's scene can produce. A beam profile station
+/// at x = -1.7e308 (finite, so it decodes) would crash the end of the run in the plot code, and
+/// again on every resume; a fitness better than the design's own profile would change the result.
+/// Both are refused, the worker's task goes to another worker, and the run ends as a clean run.
+#[test]
+fn regression_an_outcome_the_scene_cannot_produce_is_refused() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("hostile-implausible"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, 2, "liar").await;
+        let held = lease(&mut c, &liar, 2).await;
+        for (k, task) in held.iter().enumerate() {
+            let honest = evaluate(&mut c, task).await;
+            let Some(v1::outcome::Result::Evaluated(e)) = honest.result else {
+                continue; // a failed design has no numbers to forge
+            };
+            let mut metrics: serde_json::Value = serde_json::from_slice(&e.metrics_json).unwrap();
+            let forged = if k == 0 {
+                metrics["beam"]["profile"][1][0] = serde_json::json!(-1.7e308);
+                v1::Evaluated {
+                    fitness: e.fitness,
+                    metrics_json: serde_json::to_vec(&metrics).unwrap(),
+                }
+            } else {
+                v1::Evaluated {
+                    fitness: e.fitness / 2.0, // closer to 0: a better fit than the profile's
+                    metrics_json: e.metrics_json.clone(),
+                }
+            };
+            let r = c
+                .report(report(
+                    &liar,
+                    task.task_id,
+                    task_result::Result::Outcome(v1::Outcome {
+                        result: Some(v1::outcome::Result::Evaluated(forged)),
+                    }),
+                ))
+                .await
+                .unwrap()
+                .into_inner();
+            assert_eq!(
+                r.dispositions,
+                [v1::ReportDisposition::Rejected as i32],
+                "task {k}"
+            );
+        }
+    });
+    let honest = TestWorker::start(&run.url(), 2, None);
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+}
+
+/// A worker's lease lapses, the task goes back to the queue, the worker then reports late
+/// (accepted). The late report is final: the task is not leased again, so a second, forged report
+/// cannot replace the first (here it would take the best RMS from 1.014 % to 0.000 %).
+#[test]
+fn regression_a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("hostile-late"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let slow = register(&mut c, 4, "slow").await;
+        let held = lease(&mut c, &slow, 4).await;
+        // Silent: dropped after worker_timeout, its four leases back in the queue.
+        wait_until_dropped(&mut c, &slow).await;
+        let late = evaluate(&mut c, &held[0]).await;
+        let r = c
+            .report(report(
+                &slow,
+                held[0].task_id,
+                task_result::Result::Outcome(late),
+            ))
+            .await
+            .unwrap()
+            .into_inner();
+        assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
+
+        let forger = register(&mut c, 4, "forger").await;
+        let got = lease(&mut c, &forger, 4).await;
+        assert!(
+            got.iter().all(|t| t.task_id != held[0].task_id),
+            "a finished task was leased again"
+        );
+        let s = c
+            .report(report(
+                &forger,
+                held[0].task_id,
+                task_result::Result::Outcome(forged()),
+            ))
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
+    });
+    let honest = TestWorker::start(&run.url(), 2, None);
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+}
+
+/// Errors repeated by one worker for one task (here three in one `Report`) neither fail the task
+/// nor replace the design's real outcome: a task fails only after `max_attempts` different
+/// workers; one worker answers a task once.
+#[test]
+fn regression_one_worker_cannot_fail_a_task_by_repeating_errors() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("hostile-errors"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, 1, "liar").await;
+        let task = lease(&mut c, &liar, 1).await.remove(0);
+        let error = || v1::TaskResult {
+            task_id: task.task_id,
+            result: Some(task_result::Result::Error("out of memory".into())),
+            wall_seconds: 0.0,
+        };
+        let r = c
+            .report(v1::ReportRequest {
+                worker_id: liar.clone(),
+                results: vec![error(), error(), error()],
+            })
+            .await
+            .unwrap()
+            .into_inner();
+        use v1::ReportDisposition::{Duplicate, ErrorNoted};
+        assert_eq!(
+            r.dispositions,
+            [ErrorNoted as i32, Duplicate as i32, Duplicate as i32]
+        );
+        // Not leased to it again, though it has room and asks.
+        let again = c
+            .lease(v1::LeaseRequest {
+                worker_id: liar.clone(),
+                max_tasks: 1,
+                wait_ms: 0,
+            })
+            .await
+            .unwrap()
+            .into_inner()
+            .tasks;
+        assert!(again.iter().all(|t| t.task_id != task.task_id));
+    });
+    let honest = TestWorker::start(&run.url(), 2, None);
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+}
+
+/// At the cluster edge, peer strings are escaped and capped before they are repeated; an empty
+/// report with no worker id, a heartbeat of another protocol version and a report for a task of an
+/// earlier batch never leased to the reporter each get their status.
+#[test]
+fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
+    let config = small_beam_config(&scratch_dir("hostile-malformed"), 60, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        // An empty report with no worker id names no worker, so it is not answered OK.
+        let s = c.report(v1::ReportRequest::default()).await.unwrap_err();
+        assert_eq!(s.code(), Code::NotFound, "{s:?}");
+
+        let megabyte = format!("w1-\n\u{1b}[31m{}", "x".repeat(1 << 20));
+        let s = c
+            .heartbeat(v1::HeartbeatRequest {
+                worker_id: megabyte,
+                active_task_ids: vec![],
+                protocol_version: PROTOCOL_VERSION,
+            })
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::NotFound);
+        assert!(
+            s.message().len() < 300,
+            "{} bytes echoed",
+            s.message().len()
+        );
+        assert!(!s.message().contains(['\n', '\u{1b}']), "{s:?}");
+
+        let id = register(&mut c, 1, "evil\nname\u{1b}[2J").await;
+        let s = c
+            .heartbeat(v1::HeartbeatRequest {
+                worker_id: id.clone(),
+                active_task_ids: vec![],
+                protocol_version: PROTOCOL_VERSION + 1,
+            })
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
+        assert!(s.message().contains("protocol version"), "{s:?}");
+
+        // A task that exists but was leased to another worker: the probe's lease makes sure
+        // the batch is queued (before, the test raced the first submit and could see NOT_FOUND).
+        let probe = register(&mut c, 1, "probe").await;
+        let t = lease(&mut c, &probe, 1).await.remove(0);
+        let s = c
+            .report(report(
+                &id,
+                t.task_id,
+                task_result::Result::Outcome(forged()),
+            ))
+            .await
+            .unwrap_err();
+        assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
+        assert!(s.message().contains("never leased"), "{s:?}");
+    });
+    let honest = TestWorker::start(&run.url(), 2, None);
+    let summary = run.join();
+    assert_eq!(summary.evaluations, 60);
+    assert!(honest.join().is_ok());
+}
+
+/// A failed bind leaves no `run.sqlite` behind, so a retry needs neither `--resume` nor
+/// `--fresh`, and the bind error is printed once.
+#[test]
+fn regression_a_failed_bind_leaves_no_run_store_and_says_why_once() {
+    use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
+    use amorph_coordinator::store::RunStore;
+
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let config = small_beam_config(&scratch_dir("hostile-bind"), 60, SEED);
+    let options = JobOptions {
+        store: StoreMode::New,
+        listen: Some(taken.local_addr().unwrap().to_string()),
+        local_workers: Some(0),
+        ..JobOptions::default()
+    };
+    let err = run_job(&config, options).unwrap_err();
+    let mut chain = err.to_string();
+    let mut cause = std::error::Error::source(&err);
+    while let Some(c) = cause {
+        chain = format!("{chain}: {c}");
+        cause = c.source();
+    }
+    assert!(chain.starts_with("cannot listen on 127.0.0.1:"), "{chain}");
+    assert_eq!(
+        chain.matches("os error").count(),
+        1,
+        "printed once: {chain}"
+    );
+    assert!(
+        !RunStore::path_for(&config).exists(),
+        "no store left behind"
+    );
+}
+
+/// A worker with the token reports outcomes the scene *can* produce, but for other designs: each
+/// task it holds gets the honest outcome of another (every number passes the plausibility check).
+/// Unchecked, such an outcome would enter the population and change the run's result, so every
+/// outside worker's outcome that would change a population is evaluated again elsewhere (here by
+/// the coordinator itself, the only other evaluator at first); the disagreement is settled by the
+/// coordinator's own evaluation, the liar is quarantined (its calls refused with PERMISSION_DENIED,
+/// a row in the run store) and the run ends as a clean run.
+#[test]
+fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined() {
+    let expected = reference();
+    let config = small_beam_config(&scratch_dir("hostile-plausible"), EVALUATIONS, SEED);
+    let run = ClusterRun::start(&config, 0, None);
+    let honest = runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, 12, "liar").await;
+        let held = lease(&mut c, &liar, 12).await;
+        let mut truths = Vec::new();
+        for task in &held {
+            truths.push(evaluate(&mut c, task).await);
+        }
+        let mut forged = 0;
+        for (k, task) in held.iter().enumerate() {
+            // Another design's outcome where one differs (many random designs fail alike).
+            let claim = truths
+                .iter()
+                .find(|t| **t != truths[k])
+                .unwrap_or(&truths[k]);
+            forged += usize::from(*claim != truths[k]);
+            let r = c
+                .report(report(
+                    &liar,
+                    task.task_id,
+                    task_result::Result::Outcome(claim.clone()),
+                ))
+                .await
+                .unwrap()
+                .into_inner();
+            assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
+        }
+        assert!(forged > 0, "the designs all score alike: nothing to forge");
+        let honest = TestWorker::start(&run.url(), 2, None);
+        let start = Instant::now();
+        loop {
+            let r = c
+                .lease(v1::LeaseRequest {
+                    worker_id: liar.clone(),
+                    max_tasks: 0,
+                    wait_ms: 0,
+                })
+                .await;
+            match r {
+                Err(s) if s.code() == Code::PermissionDenied => break,
+                _ => assert!(
+                    start.elapsed() < Duration::from_secs(60),
+                    "never quarantined"
+                ),
+            }
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        honest
+    });
+    let store = run.store.clone();
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+    let (checks, disagreed, quarantined) =
+        amorph_coordinator::store::RunStore::peek_verification(&store).unwrap();
+    assert!(
+        checks >= 4 && disagreed >= 1,
+        "{checks} checks, {disagreed} disagreed"
+    );
+    assert_eq!(quarantined, 1);
+}
+
+/// Beyond the population: with `verify = true` a worker may still claim a *worse* outcome than the
+/// truth for a child, which then loses without a check. With `cluster.verify = "all"` every outside
+/// claim is checked, so a worker that is honest about the initial population (every one of which is
+/// checked anyway) and then calls every child it is given a failure is caught, quarantined, and the
+/// run ends as a clean run.
+#[test]
+fn regression_with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
+    let expected = reference();
+    let mut config = small_beam_config(&scratch_dir("hostile-verify-all"), EVALUATIONS, SEED);
+    config.raw.cluster.verify = amorph_coordinator::cluster::Verify::All;
+    let initial = (config.raw.search.population * config.raw.search.islands) as usize;
+    let run = ClusterRun::start(&config, 0, None);
+    let honest = runtime().block_on(async {
+        let mut c = client(&run.url()).await;
+        let liar = register(&mut c, initial as u32, "liar").await;
+        for task in lease(&mut c, &liar, initial).await {
+            let truth = evaluate(&mut c, &task).await;
+            let r = c
+                .report(report(
+                    &liar,
+                    task.task_id,
+                    task_result::Result::Outcome(truth),
+                ))
+                .await
+                .unwrap()
+                .into_inner();
+            assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
+        }
+        // The first epoch's children: every one claimed a failure, whatever it really is.
+        let children = lease(&mut c, &liar, 4).await;
+        let mut lies = 0;
+        for task in &children {
+            let failed = convert::outcome_to_wire(&amorph::task::Outcome::failed(
+                amorph::outcome::Failure::Empty,
+            ));
+            lies += usize::from(evaluate(&mut c, task).await != failed);
+            c.report(report(
+                &liar,
+                task.task_id,
+                task_result::Result::Outcome(failed),
+            ))
+            .await
+            .unwrap();
+        }
+        assert!(lies > 0, "every child really failed: nothing was a lie");
+        (TestWorker::start(&run.url(), 2, None), children.len())
+    });
+    let (honest, children) = honest;
+    let store = run.store.clone();
+    assert_eq!(fingerprint(&run.join()), expected);
+    assert!(honest.join().is_ok());
+    let (checks, disagreed, quarantined) =
+        amorph_coordinator::store::RunStore::peek_verification(&store).unwrap();
+    assert!(checks as usize >= initial + children, "{checks} checks");
+    assert!(disagreed >= 1, "{disagreed} disagreed");
+    assert_eq!(quarantined, 1);
+}
