@@ -122,10 +122,20 @@ pub struct BudgetSection {
     pub target_rms_percent: Option<f64>,
 }
 
-/// A validated configuration: what [`crate::run`] accepts.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// A validated configuration: what [`crate::run`] accepts. Its sections are the file's, checked
+/// as a whole ([`RunConfig::try_from_raw`]); [`RunConfig::to_raw`] gives the document a run
+/// records, every default and preset value written out.
+#[derive(Clone, Debug, PartialEq)]
 pub struct RunConfig {
-    pub raw: RawConfig,
+    pub name: String,
+    pub seed: u64,
+    pub results_dir: PathBuf,
+    pub cluster: ClusterSection,
+    pub search: SearchSection,
+    pub budget: BudgetSection,
+    pub export: ExportSection,
+    pub resolution: ResolutionSchedule,
+    pub scene: Scene,
     /// Where this config came from, for messages.
     pub source: PathBuf,
 }
@@ -221,15 +231,49 @@ impl RunConfig {
             .load_files(base)
             .map_err(|e| invalid(format!("scene.{e}")))?;
         validate(&raw).map_err(invalid)?;
+        let RawConfig {
+            name,
+            seed,
+            results_dir,
+            cluster,
+            search,
+            budget,
+            export,
+            resolution,
+            scene,
+        } = raw;
         Ok(Self {
-            raw,
+            name,
+            seed,
+            results_dir,
+            cluster,
+            search,
+            budget,
+            export,
+            resolution,
+            scene,
             source: path.to_owned(),
         })
     }
 
+    /// The config as a run records it (config.toml, the run store).
+    pub fn to_raw(&self) -> RawConfig {
+        RawConfig {
+            name: self.name.clone(),
+            seed: self.seed,
+            results_dir: self.results_dir.clone(),
+            cluster: self.cluster.clone(),
+            search: self.search.clone(),
+            budget: self.budget.clone(),
+            export: self.export.clone(),
+            resolution: self.resolution.clone(),
+            scene: self.scene.clone(),
+        }
+    }
+
     /// The folder this run writes its results into.
     pub fn run_dir(&self) -> PathBuf {
-        self.raw.results_dir.join(&self.raw.name)
+        self.results_dir.join(&self.name)
     }
 }
 

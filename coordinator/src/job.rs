@@ -85,7 +85,7 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
         message,
     };
     // Command-line overrides are checked by the same bounds as the config's keys.
-    let mut section = config.raw.cluster.clone();
+    let mut section = config.cluster.clone();
     if let Some(listen) = &options.listen {
         section.listen = listen.clone();
     }
@@ -117,7 +117,7 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     let server = runtime.block_on(cluster::start(
         &server_options,
         queue.clone(),
-        &config.raw.scene,
+        &config.scene,
     ))?;
     let store = match options.store {
         StoreMode::New => RunStore::create(config, false),
@@ -138,7 +138,7 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
 
     let (stop_workers, stop_rx) = watch::channel(false);
     let local = settings.local_workers;
-    let scene = Arc::new(config.raw.scene.clone());
+    let scene = Arc::new(config.scene.clone());
     // The local workers share this machine: each gets its part of the default budget.
     let budget = memory::default_budget() / local.max(1) as u64;
     let mut workers = Vec::with_capacity(local);

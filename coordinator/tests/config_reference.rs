@@ -116,7 +116,7 @@ fn leaves(table: &toml::Table, prefix: &str, out: &mut Vec<(String, toml::Value)
 
 fn written(kind: &str) -> Vec<(String, toml::Value)> {
     let config = parse(kind, &[]).unwrap();
-    let table: toml::Table = toml::to_string(&config.raw).unwrap().parse().unwrap();
+    let table: toml::Table = toml::to_string(&config.to_raw()).unwrap().parse().unwrap();
     let mut out = Vec::new();
     leaves(&table, "", &mut out);
     out

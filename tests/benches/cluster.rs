@@ -89,7 +89,7 @@ fn capacity() {
         .enable_all()
         .build()
         .unwrap();
-    let scene = quickstart().raw.scene;
+    let scene = quickstart().scene;
     println!("capacity: trivial evaluations over loopback gRPC (batches of 20,000 tasks)");
     println!("| worker processes | slots each | tasks/s (best of 3) | µs per task |");
     println!("|---:|---:|---:|---:|");
@@ -152,13 +152,13 @@ fn scaling() {
     let mut base = None;
     for workers in [1usize, 2] {
         let mut config = quickstart();
-        config.raw.name = format!("scaling-{workers}");
-        config.raw.results_dir = results.clone();
-        config.raw.budget.evaluations = Some(600);
-        config.raw.budget.wall_seconds = None;
-        config.raw.budget.target_rms_percent = None;
-        config.raw.resolution.levels.truncate(1);
-        config.raw.cluster.local_worker_threads = 1;
+        config.name = format!("scaling-{workers}");
+        config.results_dir = results.clone();
+        config.budget.evaluations = Some(600);
+        config.budget.wall_seconds = None;
+        config.budget.target_rms_percent = None;
+        config.resolution.levels.truncate(1);
+        config.cluster.local_worker_threads = 1;
         let start = Instant::now();
         let summary = run_job(
             &config,

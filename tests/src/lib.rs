@@ -114,7 +114,7 @@ pub fn thread_count_blind(
 }
 
 fn run_on(config: &RunConfig, store: &RunStore, threads: usize) -> RunSummary {
-    let mut evaluator = LocalEvaluator::new(Arc::new(config.raw.scene.clone()), threads);
+    let mut evaluator = LocalEvaluator::new(Arc::new(config.scene.clone()), threads);
     run(
         config,
         &mut evaluator,

@@ -357,8 +357,8 @@ fn tls_with_a_token_runs_and_plain_http_is_refused() {
     std::fs::write(&cert_path, key.cert.pem()).unwrap();
     std::fs::write(&key_path, key.signing_key.serialize_pem()).unwrap();
     let mut config = small_beam_config(&dir, 60, SEED);
-    config.raw.cluster.tls_cert = Some(cert_path.clone());
-    config.raw.cluster.tls_key = Some(key_path);
+    config.cluster.tls_cert = Some(cert_path.clone());
+    config.cluster.tls_key = Some(key_path);
 
     // No local worker: the external TLS worker must do every evaluation, so the run cannot end
     // before it has connected. (With a local worker the run could finish first; the TLS worker,

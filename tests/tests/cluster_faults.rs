@@ -14,8 +14,7 @@ const SEED: u64 = 11;
 
 /// The small test config as a file, with `local_workers` in-process workers.
 fn config_file(dir: &Path, local_workers: usize) -> PathBuf {
-    let config = small_beam_config(dir, EVALUATIONS, SEED);
-    let mut raw = config.raw.clone();
+    let mut raw = small_beam_config(dir, EVALUATIONS, SEED).to_raw();
     raw.cluster.local_workers = Some(local_workers);
     let path = dir.join("run.toml");
     std::fs::write(&path, toml_text(&raw)).unwrap();

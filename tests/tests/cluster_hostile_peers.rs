@@ -464,8 +464,8 @@ fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined()
 fn regression_with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
     let expected = reference();
     let mut config = small_beam_config(&scratch_dir("hostile-verify-all"), EVALUATIONS, SEED);
-    config.raw.cluster.verify = amorph_coordinator::cluster::Verify::All;
-    let initial = (config.raw.search.population * config.raw.search.islands) as usize;
+    config.cluster.verify = amorph_coordinator::cluster::Verify::All;
+    let initial = (config.search.population * config.search.islands) as usize;
     let run = ClusterRun::start(&config, 0, None);
     let honest = runtime().block_on(async {
         let mut c = client(&run.url()).await;

@@ -24,10 +24,10 @@ fn every_config_in_configs_loads_and_survives_its_own_effective_config() {
         let config = RunConfig::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         // The effective config a run writes (and a resume reads back, from anywhere) is the same
         // run: files it named are inside it.
-        let text = toml::to_string_pretty(&config.raw).unwrap();
+        let text = toml::to_string_pretty(&config.to_raw()).unwrap();
         let again = RunConfig::parse(&text, Path::new("/nonexistent/config.toml"))
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        assert_eq!(again.raw.scene, config.raw.scene, "{}", path.display());
+        assert_eq!(again.scene, config.scene, "{}", path.display());
         seen += 1;
     }
     assert_eq!(seen, 12, "the configs a user chooses from");
@@ -81,7 +81,7 @@ fn layout(dims: GridDims, hard: impl Fn(usize, usize, usize) -> bool) -> VoxelGr
 fn an_evolved_stiff_design_beats_a_top_slab_and_a_random_layout_of_its_budget() {
     let config = stiffness_config(&scratch_dir("stiffness-run"));
     let summary = run_locally(&config, 2);
-    let Scene::Stiffness(scene) = &config.raw.scene else {
+    let Scene::Stiffness(scene) = &config.scene else {
         panic!()
     };
     let best = summary.best();

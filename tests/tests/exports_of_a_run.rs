@@ -33,7 +33,7 @@ fn a_run_writes_its_slice_stack_and_reports_its_design_at_twice_the_resolution()
     let twice = GridDims::new(2 * dims.nx, 2 * dims.ny, 2 * dims.nz);
     assert_eq!(finer["finer_resolution"], twice.to_string());
     // The reported figure is what evaluating the best genome at twice the resolution gives.
-    let scene = &config.raw.scene;
+    let scene = &config.scene;
     let best = summary.best();
     let independent = scene.figure(&scene.evaluate(&best.genome, twice)).unwrap();
     assert_eq!(finer["finer_value"].as_f64().unwrap(), independent);
@@ -87,7 +87,7 @@ fn a_run_stopped_by_a_signal_leaves_the_end_of_run_work_for_its_end() {
     let dir = scratch_dir("stopped-finish");
     let config = small_beam_config(&dir, 60, 4);
     let store = RunStore::create(&config, true).unwrap();
-    let mut evaluator = LocalEvaluator::new(std::sync::Arc::new(config.raw.scene.clone()), 2);
+    let mut evaluator = LocalEvaluator::new(std::sync::Arc::new(config.scene.clone()), 2);
     let ctx = RunContext {
         store: &store,
         shutdown: &AtomicBool::new(true),

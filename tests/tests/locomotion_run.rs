@@ -54,7 +54,7 @@ fn local_workers_sharing_each_evaluation_among_threads_give_the_same_run() {
     };
     let dir = scratch_dir("walker-shared");
     let mut config = tiny_locomotion_config(&dir, 9);
-    config.raw.cluster.threads_per_evaluation = 3;
+    config.cluster.threads_per_evaluation = 3;
     let shared = ClusterRun::start(&config, 2, None).join();
     assert_eq!(shared.evaluations, 20);
     assert_eq!(shared.populations, alone.populations);
@@ -164,14 +164,14 @@ fn the_link_precision_is_a_dynamics_key() {
         "\n[scene.dynamics]\nlink_precision = \"mixed\"\n"
     );
     let config = RunConfig::parse(&mixed, Path::new("mixed.toml")).unwrap();
-    let Scene::Locomotion(scene) = &config.raw.scene else {
-        panic!("not a locomotion scene: {:?}", config.raw.scene);
+    let Scene::Locomotion(scene) = &config.scene else {
+        panic!("not a locomotion scene: {:?}", config.scene);
     };
     assert_eq!(scene.dynamics.link_precision, LinkPrecision::Mixed);
     assert!(scene.dynamics.actuation.is_some());
-    let written = toml::to_string(&config.raw).unwrap();
+    let written = toml::to_string(&config.to_raw()).unwrap();
     let reread = RunConfig::parse(&written, Path::new("config.toml")).unwrap();
-    assert_eq!(reread.raw.scene, config.raw.scene);
+    assert_eq!(reread.scene, config.scene);
 
     let single = mixed.replace("\"mixed\"", "\"single\"");
     let err = RunConfig::parse(&single, Path::new("single.toml"))
@@ -193,12 +193,12 @@ fn the_link_precision_is_a_dynamics_key() {
     );
 
     let plain = RunConfig::parse(SMALL_LOCOMOTION_RUN, Path::new("plain.toml")).unwrap();
-    let Scene::Locomotion(scene) = &plain.raw.scene else {
+    let Scene::Locomotion(scene) = &plain.scene else {
         panic!("not a locomotion scene");
     };
     assert_eq!(scene.dynamics.link_precision, LinkPrecision::Double);
     assert!(
-        !toml::to_string(&plain.raw)
+        !toml::to_string(&plain.to_raw())
             .unwrap()
             .contains("link_precision")
     );
@@ -218,8 +218,8 @@ actuated_contact = true
 "#
     );
     let config = RunConfig::parse(&text, Path::new("voxcad.toml")).unwrap();
-    let Scene::Locomotion(scene) = &config.raw.scene else {
-        panic!("not a locomotion scene: {:?}", config.raw.scene);
+    let Scene::Locomotion(scene) = &config.scene else {
+        panic!("not a locomotion scene: {:?}", config.scene);
     };
     let mut expected = LocomotionScene::default();
     let floor = expected.dynamics.floor.as_mut().unwrap();
@@ -228,7 +228,7 @@ actuated_contact = true
     assert_eq!(scene, &expected);
     assert!(scene.dynamics.actuation.is_some());
     // What the run writes back reads as the same scene.
-    let written = toml::to_string(&config.raw).unwrap();
+    let written = toml::to_string(&config.to_raw()).unwrap();
     let reread = RunConfig::parse(&written, Path::new("config.toml")).unwrap();
-    assert_eq!(reread.raw.scene, config.raw.scene);
+    assert_eq!(reread.scene, config.scene);
 }

@@ -185,7 +185,7 @@ fn checks_sent_out_with_the_next_children_change_no_bit() {
     let overlapped = finest_config(&scratch_dir("overlapped"), 400);
     let store = RunStore::create(&overlapped, true).unwrap();
     let mut recording = Recording {
-        threads: LocalEvaluator::new(std::sync::Arc::new(overlapped.raw.scene.clone()), 3),
+        threads: LocalEvaluator::new(std::sync::Arc::new(overlapped.scene.clone()), 3),
         batches: Vec::new(),
     };
     let ctx = RunContext {

@@ -78,7 +78,7 @@ fn a_combined_climb_resumes_bit_identical() {
     let climb = "insertion = 0.5\nshared = true\ncombine = true";
     let config = |dir: &Path| {
         let mut config = config(dir, 7, climb);
-        config.raw.search.local_search.fraction = 0.8;
+        config.search.local_search.fraction = 0.8;
         config
     };
     let one = fingerprint(&run_locally(&config(&scratch_dir("climb-1")), 1));
@@ -87,7 +87,7 @@ fn a_combined_climb_resumes_bit_identical() {
     // Stopped at the end of an epoch (30 initial + 3 epochs of 30) and resumed to 240.
     let dir = scratch_dir("climb-resumed");
     let mut stopped = config(&dir);
-    stopped.raw.budget.evaluations = Some(120);
+    stopped.budget.evaluations = Some(120);
     assert_eq!(run_locally(&stopped, 2).evaluations, 120);
     let resumed = resume_locally(&config(&dir), 3);
     assert!(fingerprint(&resumed) == one, "the resumed run differs");
@@ -102,8 +102,8 @@ fn operators_are_bit_identical_on_1_and_3_threads_and_never_lose_an_islands_best
     assert_eq!(one.evaluations, 240);
     assert_eq!(one.populations, three.populations);
 
-    let limits = *configs[0].raw.scene.limits();
-    let materials = configs[0].raw.scene.palette().len();
+    let limits = *configs[0].scene.limits();
+    let materials = configs[0].scene.palette().len();
     for ind in one.populations.iter().flatten() {
         let genome: &Genome = &ind.genome;
         genome.validate(&limits, materials).expect("within limits");

@@ -96,7 +96,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         listen: cli.listen,
         local_workers: cli.local_workers,
         token: None,
-        progress: Progress::stderr(config.raw.budget.evaluations),
+        progress: Progress::stderr(config.budget.evaluations),
         shutdown: shutdown.clone(),
         on_listening: Some(tx),
     };
@@ -108,23 +108,19 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     });
     let summary = run_job(&config, options).with_context(|| {
         if shutdown.load(Ordering::Relaxed) {
-            format!(
-                "run '{}' stopped; continue it with --resume",
-                config.raw.name
-            )
+            format!("run '{}' stopped; continue it with --resume", config.name)
         } else {
-            format!("run '{}' failed", config.raw.name)
+            format!("run '{}' failed", config.name)
         }
     })?;
     let best = summary.best();
     let headline = config
-        .raw
         .scene
         .headline(&best.outcome)
         .unwrap_or_else(|| "-".into());
     println!(
         "{}: best {headline} at {} after {} evaluations in {:.1} s ({:?}); report in {}",
-        config.raw.name,
+        config.name,
         summary.dims,
         summary.evaluations,
         summary.wall_seconds,

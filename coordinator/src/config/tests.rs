@@ -18,33 +18,30 @@ target = "straight"
 #[test]
 fn a_minimal_config_gets_its_tasks_preset() {
     let c = RunConfig::parse(MINIMAL, Path::new("t.toml")).unwrap();
-    let s = &c.raw.search;
+    let s = &c.search;
     assert_eq!(s.preset, Preset::Climb);
     assert_eq!((s.population, s.children_per_epoch), (48, 48));
     assert!(s.skip_unchanged && s.local_search.shared && s.local_search.combine);
     assert_eq!(s.local_search.fraction, 0.5);
     assert_eq!(s.local_search.finest_fraction, Some(1.0));
-    assert!(c.raw.resolution.stall_on_finest);
+    assert!(c.resolution.stall_on_finest);
     assert_eq!(s.mutation.probability, 0.2);
 
     let paper = MINIMAL.replace("[budget]", "[search]\npreset = \"paper\"\n[budget]");
     let c = RunConfig::parse(&paper, Path::new("t.toml")).unwrap();
-    let s = &c.raw.search;
+    let s = &c.search;
     assert_eq!((s.population, s.children_per_epoch), (50, 50));
-    assert!(!s.skip_unchanged && !c.raw.resolution.stall_on_finest);
+    assert!(!s.skip_unchanged && !c.resolution.stall_on_finest);
     assert_eq!(s.local_search, crate::search::LocalSearchParams::default());
 
     let robot = "name = \"t\"\n[budget]\nevaluations = 100\n[resolution]\nlevels = [[6, 6, 6]]\n\
                  [scene]\nkind = \"locomotion\"\n";
     let c = RunConfig::parse(robot, Path::new("t.toml")).unwrap();
-    assert_eq!(c.raw.search.preset, Preset::Paper);
+    assert_eq!(c.search.preset, Preset::Paper);
 
     let written = MINIMAL.replace("[budget]", "[search]\npopulation = 20\n[budget]");
     let c = RunConfig::parse(&written, Path::new("t.toml")).unwrap();
-    assert_eq!(
-        (c.raw.search.population, c.raw.search.children_per_epoch),
-        (20, 48)
-    );
+    assert_eq!((c.search.population, c.search.children_per_epoch), (20, 48));
 }
 
 /// The config a run records (its `config.toml`, its store) reads back to the same config: the
@@ -52,10 +49,10 @@ fn a_minimal_config_gets_its_tasks_preset() {
 #[test]
 fn a_recorded_config_reads_back_to_itself() {
     let c = RunConfig::parse(MINIMAL, Path::new("t.toml")).unwrap();
-    let text = toml::to_string(&c.raw).unwrap();
+    let text = toml::to_string(&c.to_raw()).unwrap();
     assert!(text.contains("preset = \"climb\""), "{text}");
     let back = RunConfig::parse(&text, Path::new("t.toml")).unwrap();
-    assert_eq!(back.raw, c.raw);
+    assert_eq!(back.to_raw(), c.to_raw());
 }
 
 /// `--set` takes the file's keys with the file's validation, applied in order; a bad value or
@@ -74,9 +71,13 @@ fn overrides_act_as_the_files_keys_and_a_bad_one_is_named() {
         ]),
     )
     .unwrap();
-    assert_eq!(c.raw.search.preset, Preset::Paper);
-    assert_eq!(c.raw.budget.evaluations, Some(300), "the last one wins");
-    assert!(toml::to_string(&c.raw).unwrap().contains("polynomial4"));
+    assert_eq!(c.search.preset, Preset::Paper);
+    assert_eq!(c.budget.evaluations, Some(300), "the last one wins");
+    assert!(
+        toml::to_string(&c.to_raw())
+            .unwrap()
+            .contains("polynomial4")
+    );
     for (bad, named) in [
         (
             "search.local_search.fraction=2",
@@ -98,8 +99,8 @@ fn overrides_act_as_the_files_keys_and_a_bad_one_is_named() {
 #[test]
 fn the_embedded_quickstart_is_valid() {
     let c = RunConfig::quickstart(&[]).unwrap();
-    assert_eq!(c.raw.search.preset, Preset::Climb);
-    assert!(c.raw.budget.target_rms_percent.is_some());
+    assert_eq!(c.search.preset, Preset::Climb);
+    assert!(c.budget.target_rms_percent.is_some());
 }
 
 #[test]
@@ -270,7 +271,7 @@ fn sizes_that_would_overflow_are_refused_naming_their_key() {
 #[test]
 fn a_bad_local_search_key_is_named() {
     let c = RunConfig::parse(MINIMAL, Path::new("t.toml")).unwrap();
-    assert!(c.raw.search.migration.only_if_fitter);
+    assert!(c.search.migration.only_if_fitter);
     let text = MINIMAL.replace(
         "[budget]",
         "[search.local_search]\nfraction = 2.0\n[budget]",

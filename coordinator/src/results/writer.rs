@@ -40,13 +40,13 @@ impl ResultWriter {
     pub fn create(config: &RunConfig) -> std::io::Result<Self> {
         let dir = config.run_dir();
         std::fs::create_dir_all(&dir)?;
-        let text = toml::to_string_pretty(&config.raw).map_err(std::io::Error::other)?;
+        let text = toml::to_string_pretty(&config.to_raw()).map_err(std::io::Error::other)?;
         std::fs::write(dir.join("config.toml"), &text)?;
         let mut history = BufWriter::new(File::create(dir.join("history.csv"))?);
         writeln!(
             history,
             "epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_{},mean_fitness,replacements",
-            config.raw.scene.figure_spec().column
+            config.scene.figure_spec().column
         )?;
         Ok(Self {
             dir,
@@ -150,7 +150,7 @@ impl ResultWriter {
             summary.dims,
             SMOOTH_SAMPLES_AT_END,
         )?);
-        let export = &self.config.raw.export;
+        let export = &self.config.export;
         // A run stopped by a signal is not finished (it resumes from its store), and the person
         // who stopped it is waiting: the end-of-run work that simulates or slices the best design
         // again (seconds for a beam's twice-finer check, minutes for a 20³ robot's walk) waits
@@ -192,7 +192,7 @@ impl ResultWriter {
         } else {
             Vec::new()
         };
-        let name = &self.config.raw.name;
+        let name = &self.config.name;
         write_progress(&self.dir, name, summary, scene.figure_spec())?;
         let mut json = serde_json::json!({
             "name": name,

@@ -62,8 +62,8 @@ pub fn run(
     evaluator: &mut dyn Evaluator,
     ctx: &RunContext<'_>,
 ) -> Result<RunSummary> {
-    let schedule = &config.raw.resolution;
-    let scene = Arc::new(config.raw.scene.clone());
+    let schedule = &config.resolution;
+    let scene = Arc::new(config.scene.clone());
     let mut writer = ResultWriter::create(config)?;
     let mut diversity = DiversityLog::create(writer.dir())?;
     let mut history = Vec::new();
@@ -138,7 +138,7 @@ fn stop_reason(
     search: &Search,
     shutdown: &AtomicBool,
 ) -> Option<StopReason> {
-    let budget = &config.raw.budget;
+    let budget = &config.budget;
     if shutdown.load(Ordering::Relaxed) {
         return Some(StopReason::Shutdown);
     }
@@ -162,7 +162,7 @@ fn stop_reason(
     // The task's stop rule, at the final resolution only (a coarse level's error is not the
     // design's).
     if let Some(target) = budget.target_rms_percent
-        && search.resolution.is_final(&config.raw.resolution)
+        && search.resolution.is_final(&config.resolution)
         && scene.meets_target(&search.best().outcome, target)
     {
         return Some(StopReason::TargetReached);

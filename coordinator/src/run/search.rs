@@ -90,28 +90,27 @@ impl Search {
         evaluator: &mut dyn Evaluator,
         ctx: &RunContext<'_>,
     ) -> Result<Self> {
-        let raw = &config.raw;
         let breeding = Breeding {
-            mutation: raw.search.mutation.clone(),
-            local_search: raw.search.local_search.clone(),
+            mutation: config.search.mutation.clone(),
+            local_search: config.search.local_search.clone(),
             scene,
         };
         let island_rng = |i: usize| {
-            let mut rng = ChaCha8Rng::seed_from_u64(raw.seed);
+            let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
             rng.set_stream(i as u64 + 1);
             rng
         };
-        let mut migration_rng = ChaCha8Rng::seed_from_u64(raw.seed);
+        let mut migration_rng = ChaCha8Rng::seed_from_u64(config.seed);
         migration_rng.set_stream(0);
 
-        let mut rngs: Vec<ChaCha8Rng> = (0..raw.search.islands).map(island_rng).collect();
+        let mut rngs: Vec<ChaCha8Rng> = (0..config.search.islands).map(island_rng).collect();
         let initial: Vec<Vec<Genome>> = rngs
             .iter_mut()
             .map(|rng| {
                 Island::initial_genomes(
                     rng,
-                    raw.search.population,
-                    raw.search.initial_points,
+                    config.search.population,
+                    config.search.initial_points,
                     &breeding,
                 )
             })
@@ -141,11 +140,11 @@ impl Search {
             checked_best: f64::NEG_INFINITY,
             switch_unaffordable: false,
             overlap: None,
-            parent_designs: raw.search.skip_unchanged.then(ParentDesigns::default),
+            parent_designs: config.search.skip_unchanged.then(ParentDesigns::default),
             unchanged_children: 0,
         };
         search.breed_for_level(config);
-        let dims = raw.resolution.dims(0);
+        let dims = config.resolution.dims(0);
         let outcomes = evaluate_settled(
             &mut search,
             evaluator,
@@ -232,8 +231,8 @@ impl Search {
     /// Sets the local search to act as configured at the current level
     /// (`local_search.finest_fraction` at the finest).
     pub(super) fn breed_for_level(&mut self, config: &RunConfig) {
-        let finest = self.resolution.is_final(&config.raw.resolution);
-        self.breeding.local_search = (config.raw.search.local_search).at_level(finest);
+        let finest = self.resolution.is_final(&config.resolution);
+        self.breeding.local_search = (config.search.local_search).at_level(finest);
     }
 
     /// The children of the next epoch at `dims`, with `spent` evaluations of the budget spent
@@ -245,9 +244,8 @@ impl Search {
         dims: GridDims,
         spent: u64,
     ) -> Vec<Vec<Child>> {
-        let raw = &config.raw;
         let islands = self.islands.len();
-        let mut left = raw
+        let mut left = config
             .budget
             .evaluations
             .map_or(u64::MAX, |max| max.saturating_sub(spent));
@@ -285,7 +283,7 @@ impl Search {
         let counts: Vec<usize> = (0..islands)
             .map(|i| {
                 let share = left / islands as u64 + u64::from((i as u64) < left % islands as u64);
-                let per_island = config.raw.search.children_per_epoch;
+                let per_island = config.search.children_per_epoch;
                 if skipping {
                     per_island
                 } else {
@@ -349,7 +347,7 @@ impl Search {
 
     /// Migration, when this epoch is one of its interval's.
     pub(super) fn migrate(&mut self, config: &RunConfig) -> Vec<MigrationRecord> {
-        let migration = &config.raw.search.migration;
+        let migration = &config.search.migration;
         let mut migrations = Vec::new();
         if migration.interval > 0 && self.epoch.is_multiple_of(migration.interval) {
             for event in migrate(&mut self.islands, migration, &mut self.migration_rng) {

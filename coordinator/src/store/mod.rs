@@ -209,7 +209,7 @@ pub(crate) fn unix_now() -> f64 {
 }
 
 fn config_text(config: &RunConfig) -> String {
-    toml::to_string(&config.raw).expect("configs serialize")
+    toml::to_string(&config.to_raw()).expect("configs serialize")
 }
 
 /// The first key (dotted) whose value differs between two configs, ignoring `budget` (a run may

@@ -49,13 +49,13 @@ impl Search {
         let island = (self.islands.iter())
             .position(|i| std::ptr::eq(i.best(), best))
             .expect("the run's best is an island's best");
-        let affordable = (config.raw.budget.evaluations).is_none_or(|max| self.evaluations < max);
+        let affordable = (config.budget.evaluations).is_none_or(|max| self.evaluations < max);
         if !affordable || self.finest_checked.as_ref() == Some(&best.genome) {
             return Ok(self.checked_best);
         }
         let mut genomes = vec![Vec::new(); island + 1];
         genomes[island].push(best.genome.clone());
-        let schedule = &config.raw.resolution;
+        let schedule = &config.resolution;
         let finest = schedule.finest();
         let mut parts = vec![Part::number(self, &genomes, finest, Purpose::FinestCheck)];
         let dims = schedule.dims(self.resolution.level);

@@ -23,7 +23,7 @@ impl Search {
         evaluator: &mut dyn Evaluator,
         ctx: &RunContext<'_>,
     ) -> Result<()> {
-        let schedule = &config.raw.resolution;
+        let schedule = &config.resolution;
         let reevaluations: usize = self.islands.iter().map(|i| i.population.len()).sum();
         let watched = if schedule.stall_on_finest && !self.resolution.is_final(schedule) {
             self.check_on_finest(config, evaluator, ctx)?
@@ -31,7 +31,6 @@ impl Search {
             self.best().outcome.rank()
         };
         let switch_affordable = config
-            .raw
             .budget
             .evaluations
             .is_none_or(|max| max.saturating_sub(self.evaluations) >= reevaluations as u64);
