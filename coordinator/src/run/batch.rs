@@ -3,18 +3,29 @@
 //! part the search may still drop, held until it keeps it), and outside workers' claims settled
 //! (`verification.rs`) before the search sees them.
 
+use std::collections::HashMap;
 use std::sync::Mutex;
 
 use amorph::genome::Genome;
 use amorph::task::Outcome;
 use amorph::voxel::GridDims;
 
-use super::search::Search;
 use super::{Result, RunContext};
 use crate::evaluator::{Completion, Evaluator, Origin, Task};
 use crate::ids::TaskId;
-use crate::store::{EvaluationRecord, Purpose, StoreError, unix_now};
+use crate::store::{EvaluationRecord, Purpose, StoreError, StoredEvaluation, unix_now};
 use crate::verification::{self, Decisive, EARLIER_SESSION, Evaluated};
+
+/// The run's accounts that every batch reads and advances: the last epoch ended, the evaluations
+/// counted, the last task number given, and the outcomes an earlier, interrupted session of the
+/// run stored, by task id (see [`crate::store`]), which a batch takes instead of evaluating again.
+#[derive(Debug, Default)]
+pub(super) struct Ledger {
+    pub(super) epoch: usize,
+    pub(super) evaluations: u64,
+    pub(super) next_task: u64,
+    pub(super) replay: HashMap<TaskId, StoredEvaluation>,
+}
 
 /// One batch of genomes per island, numbered as tasks of the search: the unit a purpose, a
 /// resolution and an epoch of the run store belong to.
@@ -33,22 +44,22 @@ impl Part {
     /// Numbers `genomes` as the search's next tasks. Children belong to the epoch they are bred
     /// for, everything else to the epoch just ended.
     pub(super) fn number(
-        search: &mut Search,
+        ledger: &mut Ledger,
         genomes: &[Vec<Genome>],
         dims: GridDims,
         purpose: Purpose,
     ) -> Self {
         let epoch = match purpose {
-            Purpose::Child => search.epoch + 1,
-            Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => search.epoch,
+            Purpose::Child => ledger.epoch + 1,
+            Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => ledger.epoch,
         };
         let mut tasks = Vec::new();
         let mut islands = Vec::new();
         for (island, batch) in genomes.iter().enumerate() {
             for genome in batch {
-                search.next_task += 1;
+                ledger.next_task += 1;
                 tasks.push(Task {
-                    id: TaskId(search.next_task),
+                    id: TaskId(ledger.next_task),
                     genome: genome.clone(),
                     dims,
                 });
@@ -106,7 +117,7 @@ pub(super) struct Held {
 }
 
 impl Held {
-    pub(super) fn keep(self, search: &mut Search, ctx: &RunContext<'_>) -> Result<()> {
+    pub(super) fn keep(self, ledger: &mut Ledger, ctx: &RunContext<'_>) -> Result<()> {
         for (slot, done, finished) in &self.fresh {
             ctx.store
                 .record_evaluation(&self.part.record(*slot, done, *finished))?;
@@ -117,7 +128,7 @@ impl Held {
         for _ in 0..self.fresh.len() + self.replayed {
             ctx.progress.evaluated();
         }
-        search.evaluations += self.part.tasks.len() as u64;
+        ledger.evaluations += self.part.tasks.len() as u64;
         Ok(())
     }
 }
@@ -131,7 +142,7 @@ type PartOutcomes = Vec<Vec<Vec<Evaluated>>>;
 /// [`Held`], each with its outcomes (replayed ones included) for the search to keep or drop.
 /// Outside workers' outcomes are still claims: [`settle`] them before use.
 pub(super) fn evaluate_parts(
-    search: &mut Search,
+    ledger: &mut Ledger,
     evaluator: &mut dyn Evaluator,
     parts: Vec<Part>,
     stored: usize,
@@ -148,12 +159,12 @@ pub(super) fn evaluate_parts(
             // Taken only where it is this task: children bred beside a finest-level check and
             // dropped by the switch held these task numbers before the re-evaluation that
             // follows took them, and that re-evaluation must still find its stored outcomes.
-            let matches = search.replay.get(&task.id).is_some_and(|s| {
+            let matches = ledger.replay.get(&task.id).is_some_and(|s| {
                 s.resolution == part.resolution
                     && serde_json::to_string(&task.genome).is_ok_and(|g| g == s.genome_json)
             });
             let stored_outcome = if matches {
-                search.replay.remove(&task.id)
+                ledger.replay.remove(&task.id)
             } else {
                 None
             };
@@ -243,7 +254,7 @@ pub(super) fn evaluate_parts(
             .collect();
         outcomes.push(part.group(evaluated));
         if p < stored {
-            search.evaluations += part.tasks.len() as u64;
+            ledger.evaluations += part.tasks.len() as u64;
         } else {
             held.push(Held {
                 part,
@@ -261,15 +272,15 @@ pub(super) fn evaluate_parts(
 /// holds take it from there; every new outcome is stored the moment it arrives. Outside workers'
 /// outcomes are still claims: [`settle`] them before use.
 pub(super) fn evaluate_all(
-    search: &mut Search,
+    ledger: &mut Ledger,
     evaluator: &mut dyn Evaluator,
     genomes: &[Vec<Genome>],
     dims: GridDims,
     purpose: Purpose,
     ctx: &RunContext<'_>,
 ) -> Result<Vec<Vec<Evaluated>>> {
-    let part = Part::number(search, genomes, dims, purpose);
-    let (mut outcomes, _) = evaluate_parts(search, evaluator, vec![part], 1, ctx)?;
+    let part = Part::number(ledger, genomes, dims, purpose);
+    let (mut outcomes, _) = evaluate_parts(ledger, evaluator, vec![part], 1, ctx)?;
     Ok(outcomes.pop().expect("one part"))
 }
 
@@ -307,14 +318,14 @@ pub(super) fn settle(
 /// [`evaluate_all`] then [`settle`] with every claim decisive: a batch whose every outcome the
 /// search keeps (initial populations, re-evaluations, checks at the finest level).
 pub(super) fn evaluate_settled(
-    search: &mut Search,
+    ledger: &mut Ledger,
     evaluator: &mut dyn Evaluator,
     genomes: &[Vec<Genome>],
     dims: GridDims,
     purpose: Purpose,
     ctx: &RunContext<'_>,
 ) -> Result<Vec<Vec<(TaskId, Outcome)>>> {
-    let batch = evaluate_all(search, evaluator, genomes, dims, purpose, ctx)?;
+    let batch = evaluate_all(ledger, evaluator, genomes, dims, purpose, ctx)?;
     settle(
         batch,
         genomes,

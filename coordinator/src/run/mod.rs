@@ -82,8 +82,8 @@ pub fn run(
         let migrations = search.migrate(config);
         record_epoch(&search, &migrations, dims, ctx.store)?;
         diversity.record(
-            search.epoch,
-            search.evaluations,
+            search.ledger.epoch,
+            search.ledger.evaluations,
             &search.islands,
             &scene,
             dims,
@@ -98,15 +98,15 @@ pub fn run(
             .collect();
         let status = evaluator.status();
         ctx.progress.epoch(
-            search.epoch,
+            search.ledger.epoch,
             scene.headline(&best.outcome),
             dims,
             &island_bests,
             status.as_deref(),
         );
         info!(
-            epoch = search.epoch,
-            evaluations = search.evaluations,
+            epoch = search.ledger.epoch,
+            evaluations = search.ledger.evaluations,
             resolution = %dims,
             best = scene.headline(&best.outcome).as_deref().unwrap_or("-"),
             islands = ?island_bests,
@@ -119,8 +119,8 @@ pub fn run(
     let dims = schedule.dims(search.resolution.level);
     let summary = RunSummary {
         stop,
-        epochs: search.epoch,
-        evaluations: search.evaluations,
+        epochs: search.ledger.epoch,
+        evaluations: search.ledger.evaluations,
         unchanged_children: search.unchanged_children,
         wall_seconds: search.clock.seconds(),
         dims,
@@ -145,13 +145,15 @@ fn stop_reason(
     if search.switch_unaffordable
         || budget
             .evaluations
-            .is_some_and(|max| search.evaluations >= max)
+            .is_some_and(|max| search.ledger.evaluations >= max)
     {
         return Some(StopReason::EvaluationBudget);
     }
     // While replaying what an earlier session recorded, only that session's own stopping rules
     // apply: it went on, so this session goes on too.
-    let replaying = search.replay_until.is_some_and(|last| search.epoch < last);
+    let replaying = search
+        .replay_until
+        .is_some_and(|last| search.ledger.epoch < last);
     if !replaying
         && budget
             .wall_seconds

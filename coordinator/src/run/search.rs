@@ -15,16 +15,16 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tracing::info;
 
-use super::batch::{evaluate_all, evaluate_settled, settle};
+use super::batch::{Ledger, evaluate_all, evaluate_settled, settle};
 use super::{Result, RunContext};
 use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
-use crate::ids::{IslandId, TaskId};
+use crate::ids::IslandId;
 use crate::search::{
     Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest, first_in_turn,
     keep_at_least_one, migrate,
 };
-use crate::store::{MigrationRecord, Purpose, StoredEvaluation};
+use crate::store::{MigrationRecord, Purpose};
 use crate::summary::fittest;
 use crate::verification::Evaluated;
 
@@ -39,11 +39,8 @@ pub(super) struct Search {
     pub(super) islands: Vec<Island>,
     migration_rng: ChaCha8Rng,
     pub(super) resolution: ResolutionState,
-    pub(super) epoch: usize,
-    pub(super) evaluations: u64,
-    pub(super) next_task: u64,
-    /// Outcomes of an earlier, interrupted session of this run, by task id (see [`crate::store`]).
-    pub(super) replay: HashMap<TaskId, StoredEvaluation>,
+    /// The epochs, evaluations and task numbers so far, and what an earlier session stored.
+    pub(super) ledger: Ledger,
     /// The last epoch that session recorded: up to it the replay must match the store exactly.
     pub(super) replay_until: Option<usize>,
     /// The evaluation count at the end of every epoch an earlier session recorded: where a
@@ -125,10 +122,12 @@ impl Search {
             islands: Vec::new(),
             migration_rng,
             resolution: ResolutionState::new(),
-            epoch: 0,
-            evaluations: 0,
-            next_task: 0,
-            replay,
+            ledger: Ledger {
+                epoch: 0,
+                evaluations: 0,
+                next_task: 0,
+                replay,
+            },
             replay_until,
             replay_epoch_evaluations,
             clock: RunClock {
@@ -146,7 +145,7 @@ impl Search {
         search.breed_for_level(config);
         let dims = config.resolution.dims(0);
         let outcomes = evaluate_settled(
-            &mut search,
+            &mut search.ledger,
             evaluator,
             &initial,
             dims,
@@ -192,16 +191,23 @@ impl Search {
             .then_some(self.breeding.scene.limits().max_points);
         let (children, genomes, batch) = match self.overlap.take() {
             Some(overlap) if overlap.dims == dims => {
-                overlap.held.keep(self, ctx)?;
+                overlap.held.keep(&mut self.ledger, ctx)?;
                 (overlap.children, overlap.genomes, overlap.batch)
             }
             other => {
                 if let Some(overlap) = other {
                     self.drop_overlap(overlap);
                 }
-                let children = self.breed_children(config, dims, self.evaluations);
+                let children = self.breed_children(config, dims, self.ledger.evaluations);
                 let genomes = genomes_of(&children);
-                let batch = evaluate_all(self, evaluator, &genomes, dims, Purpose::Child, ctx)?;
+                let batch = evaluate_all(
+                    &mut self.ledger,
+                    evaluator,
+                    &genomes,
+                    dims,
+                    Purpose::Child,
+                    ctx,
+                )?;
                 (children, genomes, batch)
             }
         };
@@ -218,7 +224,7 @@ impl Search {
                 .collect()
         };
         let outcomes = settle(batch, &genomes, dims, evaluator, ctx, &winners)?;
-        self.epoch += 1;
+        self.ledger.epoch += 1;
         Ok(self
             .islands
             .iter_mut()
@@ -253,7 +259,7 @@ impl Search {
         // budget cut the epoch short (the run ended there and was resumed with a larger budget),
         // its recorded evaluations say how short; otherwise they leave room for every child and
         // change nothing.
-        if let Some(&recorded) = self.replay_epoch_evaluations.get(&(self.epoch + 1)) {
+        if let Some(&recorded) = self.replay_epoch_evaluations.get(&(self.ledger.epoch + 1)) {
             left = left.min(recorded.saturating_sub(spent));
         }
         let breeding = &self.breeding;
@@ -334,7 +340,7 @@ impl Search {
         self.unchanged_children += dropped;
         if dropped > 0 {
             info!(
-                epoch = self.epoch + 1,
+                epoch = self.ledger.epoch + 1,
                 dropped, "children that make their dominant parent's design not evaluated"
             );
         }
@@ -349,9 +355,9 @@ impl Search {
     pub(super) fn migrate(&mut self, config: &RunConfig) -> Vec<MigrationRecord> {
         let migration = &config.search.migration;
         let mut migrations = Vec::new();
-        if migration.interval > 0 && self.epoch.is_multiple_of(migration.interval) {
+        if migration.interval > 0 && self.ledger.epoch.is_multiple_of(migration.interval) {
             for event in migrate(&mut self.islands, migration, &mut self.migration_rng) {
-                info!(epoch = self.epoch, from = %event.from, to = %event.to, emigrant = event.emigrant, replaced = ?event.replaced, task = %event.task, "migration");
+                info!(epoch = self.ledger.epoch, from = %event.from, to = %event.to, emigrant = event.emigrant, replaced = ?event.replaced, task = %event.task, "migration");
                 migrations.push(MigrationRecord {
                     from: event.from.0,
                     to: event.to.0,

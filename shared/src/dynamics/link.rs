@@ -18,21 +18,15 @@
 //! angular momentum exactly, as a rigid body needs.
 
 use super::lanes::{Arith, Element, LANES, Lanes, Portable, lane_array};
-use super::link_ends::{Ends, Group, Kernel, LinkOut, Loads, Scatter, Source, Store, VoxelView};
+use super::link_ends::{
+    Ends, Group, Job, Kernel, LinkOut, Loads, Scatter, Source, Store, VoxelView,
+};
+pub use super::link_ends::{LinkLoads, LinkStep};
 use super::link_frame::{M3, SERIES_LIMIT, V3, axial_split, on_axis};
-use super::math::{Quat, Vec3};
+use super::math::Quat;
 use super::single::SingleCopy;
 use super::single_lanes::{SINGLE_LANES, Single};
 use super::state::{Links, Voxels};
-
-/// Per-step inputs of the link pass.
-#[derive(Clone, Copy, Debug)]
-pub struct LinkStep {
-    /// Voxel size s, m (the rest length of a passive link).
-    pub voxel_size: f64,
-    /// Linear rest-length factor λ(t) of actuated material (1 when not actuating).
-    pub actuation_factor: f64,
-}
 
 /// Adds every link's forces and moments to the voxels' accumulators. Returns the largest axial
 /// strain |δ|/L seen, for divergence detection. `DAMPED` and `ACTUATED` select the variant at
@@ -198,54 +192,6 @@ where
     link_pass_lanes::<_, S, O, L, DAMPED, ACTUATED, true>(P::PORTABLE, job)
 }
 
-/// What one run of the kernel reads and where it writes: the links' ends and axes, their
-/// constants and the voxels' state in the kernel's precision `E`.
-pub(super) struct Job<'a, S, E, O> {
-    pub(super) links: &'a Links,
-    pub(super) constants: LinkConstants<'a, E>,
-    pub(super) source: S,
-    pub(super) range: std::ops::Range<usize>,
-    pub(super) step: LinkStep,
-    pub(super) out: O,
-}
-
-impl<'a, O> Job<'a, VoxelView<'a>, f64, O> {
-    fn double(
-        links: &'a Links,
-        source: VoxelView<'a>,
-        range: std::ops::Range<usize>,
-        step: LinkStep,
-        out: O,
-    ) -> Self {
-        Self {
-            links,
-            constants: LinkConstants {
-                axial: &links.axial,
-                shear: &links.shear,
-                torsion: &links.torsion,
-                bending: &links.bending,
-                damping_time: &links.damping_time,
-                actuated_fraction: &links.actuated_fraction,
-            },
-            source,
-            range,
-            step,
-            out,
-        }
-    }
-}
-
-/// The per-link constants the kernel reads (see [`Links`]), in its precision.
-#[derive(Clone, Copy)]
-pub(super) struct LinkConstants<'a, E> {
-    pub(super) axial: &'a [E],
-    pub(super) shear: &'a [E],
-    pub(super) torsion: &'a [E],
-    pub(super) bending: &'a [E],
-    pub(super) damping_time: &'a [E],
-    pub(super) actuated_fraction: &'a [E],
-}
-
 /// The kernel as a `pulp` operation, so that it is compiled with the instruction set of its
 /// arithmetic enabled. The job goes by reference and is moved out inside: `pulp` passes an
 /// operation of more than eight words another way, which lost the inlined vector code, and a
@@ -271,14 +217,6 @@ where
         let job = self.job.take().expect("the job is set before the dispatch");
         link_pass_lanes::<A, S, O, L, DAMPED, ACTUATED, true>(self.arith, job)
     }
-}
-
-/// Per-link results of [`link_loads`], one slot per link of its range.
-#[derive(Debug)]
-pub struct LinkLoads<'a> {
-    pub force_b: &'a mut [Vec3],
-    pub moment_a: &'a mut [Vec3],
-    pub moment_b: &'a mut [Vec3],
 }
 
 /// `RUNS` false reads every group through the general gather (for the test that the two agree).
@@ -494,6 +432,7 @@ pub fn link_energy(links: &Links, voxels: &Voxels, step: LinkStep) -> f64 {
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
+    use crate::dynamics::math::Vec3;
     use crate::dynamics::state::build_state;
     use crate::material::{Material, MaterialId, Palette};
     use crate::voxel::{GridDims, VoxelGrid};

@@ -1,11 +1,77 @@
-//! Where a link pass reads its voxels and puts its results: the voxels' state gathered into lanes
+//! What a link pass is given and where it reads and writes, for both precisions of the kernel:
+//! its inputs ([`LinkStep`], [`Job`], [`LinkConstants`]), the voxels' state gathered into lanes
 //! ([`Source`], [`Ends`]), and the loads scattered onto the voxels in link order ([`Scatter`]) or
-//! stored per link for a parallel pass ([`Store`]).
+//! stored per link for a parallel pass ([`Store`], [`LinkLoads`]).
 
 use super::lanes::{Arith, LANES, Lanes, Regroup, load_columns4, load_image3, store_image3};
-use super::link::LinkLoads;
 use super::link_frame::{V3, gather_quat};
 use super::math::{Quat, Vec3};
+use super::state::Links;
+
+/// Per-step inputs of the link pass.
+#[derive(Clone, Copy, Debug)]
+pub struct LinkStep {
+    /// Voxel size s, m (the rest length of a passive link).
+    pub voxel_size: f64,
+    /// Linear rest-length factor λ(t) of actuated material (1 when not actuating).
+    pub actuation_factor: f64,
+}
+
+/// What one run of the kernel reads and where it writes: the links' ends and axes, their
+/// constants and the voxels' state in the kernel's precision `E`.
+pub(super) struct Job<'a, S, E, O> {
+    pub(super) links: &'a Links,
+    pub(super) constants: LinkConstants<'a, E>,
+    pub(super) source: S,
+    pub(super) range: std::ops::Range<usize>,
+    pub(super) step: LinkStep,
+    pub(super) out: O,
+}
+
+impl<'a, O> Job<'a, VoxelView<'a>, f64, O> {
+    pub(super) fn double(
+        links: &'a Links,
+        source: VoxelView<'a>,
+        range: std::ops::Range<usize>,
+        step: LinkStep,
+        out: O,
+    ) -> Self {
+        Self {
+            links,
+            constants: LinkConstants {
+                axial: &links.axial,
+                shear: &links.shear,
+                torsion: &links.torsion,
+                bending: &links.bending,
+                damping_time: &links.damping_time,
+                actuated_fraction: &links.actuated_fraction,
+            },
+            source,
+            range,
+            step,
+            out,
+        }
+    }
+}
+
+/// The per-link constants the kernel reads (see [`Links`]), in its precision.
+#[derive(Clone, Copy)]
+pub(super) struct LinkConstants<'a, E> {
+    pub(super) axial: &'a [E],
+    pub(super) shear: &'a [E],
+    pub(super) torsion: &'a [E],
+    pub(super) bending: &'a [E],
+    pub(super) damping_time: &'a [E],
+    pub(super) actuated_fraction: &'a [E],
+}
+
+/// Per-link results of [`super::link::link_loads`], one slot per link of its range.
+#[derive(Debug)]
+pub struct LinkLoads<'a> {
+    pub force_b: &'a mut [Vec3],
+    pub moment_a: &'a mut [Vec3],
+    pub moment_b: &'a mut [Vec3],
+}
 
 /// One group of links as the kernel read it: lane j is link `k0 + j` and joins the voxels
 /// `ends[j]` (a, b, axis); `count` lanes are real; `run` when they join consecutive voxels to

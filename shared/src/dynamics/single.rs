@@ -18,11 +18,10 @@
 //! kernel's by the rounding measured in docs/explanation/physics.md.
 
 use super::lanes::{Arith, LANES, Lanes, Portable, Regroup, load_columns3, load_columns4};
-use super::link::{Job, LinkConstants, LinkStep};
-use super::link_ends::{Ends, Source};
+use super::link_ends::{Ends, Job, LinkConstants, LinkStep, Source};
 use super::link_frame::V3;
 use super::math::Vec3;
-use super::single_lanes::{SINGLE_LANES, Widen};
+use super::single_lanes::{SINGLE_LANES, Widen, run_of_four};
 use super::state::{Links, Voxels};
 
 /// Components of the `f32` copy, one array each: position (relative to voxel 0), orientation,
@@ -274,17 +273,6 @@ impl<A: Widen, Lo: ReadHalf, Hi: ReadHalf> Read<A> for Halves<'_, Lo, Hi> {
             arith,
         }
     }
-}
-
-/// Whether links `h..h + 4` of a group join four consecutive voxels to four consecutive voxels.
-#[inline(always)]
-pub(super) fn run_of_four(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> bool {
-    let (a0, b0) = (ends[h].0, ends[h].1);
-    let mut run = true;
-    for j in 1..LANES {
-        run &= ends[h + j].0 == a0 + j && ends[h + j].1 == b0 + j;
-    }
-    run
 }
 
 /// The a and b ends of links `h..h + 4`, a run of four.

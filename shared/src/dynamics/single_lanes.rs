@@ -7,7 +7,6 @@ use pulp::Simd;
 use super::lanes::{Arith, LANES, Lanes, Portable, Regroup, portable_arith};
 use super::link_ends::{Group, Kernel, LinkOut, Loads};
 use super::link_frame::V3;
-use super::single::run_of_four;
 
 /// Links computed together in single precision, one per lane.
 pub const SINGLE_LANES: usize = 8;
@@ -216,4 +215,15 @@ pub(super) fn halves<A: Widen>(arith: A, v: V3<A, SINGLE_LANES>) -> [V3<A::Wide,
             },
         },
     ]
+}
+
+/// Whether links `h..h + 4` of a group join four consecutive voxels to four consecutive voxels.
+#[inline(always)]
+pub(super) fn run_of_four(ends: &[(usize, usize, u8); SINGLE_LANES], h: usize) -> bool {
+    let (a0, b0) = (ends[h].0, ends[h].1);
+    let mut run = true;
+    for j in 1..LANES {
+        run &= ends[h + j].0 == a0 + j && ends[h + j].1 == b0 + j;
+    }
+    run
 }

@@ -49,7 +49,8 @@ impl Search {
         let island = (self.islands.iter())
             .position(|i| std::ptr::eq(i.best(), best))
             .expect("the run's best is an island's best");
-        let affordable = (config.budget.evaluations).is_none_or(|max| self.evaluations < max);
+        let affordable =
+            (config.budget.evaluations).is_none_or(|max| self.ledger.evaluations < max);
         if !affordable || self.finest_checked.as_ref() == Some(&best.genome) {
             return Ok(self.checked_best);
         }
@@ -57,16 +58,21 @@ impl Search {
         genomes[island].push(best.genome.clone());
         let schedule = &config.resolution;
         let finest = schedule.finest();
-        let mut parts = vec![Part::number(self, &genomes, finest, Purpose::FinestCheck)];
+        let mut parts = vec![Part::number(
+            &mut self.ledger,
+            &genomes,
+            finest,
+            Purpose::FinestCheck,
+        )];
         let dims = schedule.dims(self.resolution.level);
         let islands_before = self.islands.clone();
-        let next_task_before = self.next_task;
+        let next_task_before = self.ledger.next_task;
         let unchanged_before = self.unchanged_children;
         // The check is part of the budget the children share.
-        let children = self.breed_children(config, dims, self.evaluations + 1);
+        let children = self.breed_children(config, dims, self.ledger.evaluations + 1);
         let ahead = genomes_of(&children);
-        parts.push(Part::number(self, &ahead, dims, Purpose::Child));
-        let (mut batches, held) = evaluate_parts(self, evaluator, parts, 1, ctx)?;
+        parts.push(Part::number(&mut self.ledger, &ahead, dims, Purpose::Child));
+        let (mut batches, held) = evaluate_parts(&mut self.ledger, evaluator, parts, 1, ctx)?;
         if let Some(held) = held.into_iter().next() {
             let batch = batches.pop().expect("the children's part");
             self.overlap = Some(Overlap {
@@ -90,7 +96,7 @@ impl Search {
             &verification::all_decide,
         )?;
         let (_, outcome) = &outcomes[island][0];
-        info!(epoch = self.epoch, island, rank = outcome.rank(), resolution = %finest, "the run's best checked at the finest level");
+        info!(epoch = self.ledger.epoch, island, rank = outcome.rank(), resolution = %finest, "the run's best checked at the finest level");
         let genome = genomes
             .swap_remove(island)
             .pop()
@@ -105,7 +111,7 @@ impl Search {
     /// Forgets children bred ahead of their epoch as if they had never been bred.
     pub(super) fn drop_overlap(&mut self, overlap: Overlap) {
         self.islands = overlap.islands_before;
-        self.next_task = overlap.next_task_before;
+        self.ledger.next_task = overlap.next_task_before;
         self.unchanged_children = overlap.unchanged_before;
     }
 }

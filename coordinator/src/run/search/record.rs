@@ -27,8 +27,8 @@ impl Search {
                 history_row(
                     scene,
                     island,
-                    self.epoch,
-                    self.evaluations,
+                    self.ledger.epoch,
+                    self.ledger.evaluations,
                     wall,
                     dims,
                     replacements,
@@ -56,8 +56,11 @@ pub(in crate::run) fn record_epoch(
                 .collect()
         })
         .collect();
-    if search.replay_until.is_some_and(|last| search.epoch <= last) {
-        let stored = store.population(search.epoch)?;
+    if search
+        .replay_until
+        .is_some_and(|last| search.ledger.epoch <= last)
+    {
+        let stored = store.population(search.ledger.epoch)?;
         let replayed: Vec<Vec<TaskId>> = populations
             .iter()
             .map(|p| p.iter().map(|&(t, _)| t).collect())
@@ -65,14 +68,14 @@ pub(in crate::run) fn record_epoch(
         if stored != replayed {
             return Err(RunError::Replay(format!(
                 "the replayed populations of epoch {} differ from the ones {} recorded",
-                search.epoch,
+                search.ledger.epoch,
                 store.path().display()
             )));
         }
     }
     store.record_epoch(&EpochRecord {
-        epoch: search.epoch,
-        evaluations: search.evaluations,
+        epoch: search.ledger.epoch,
+        evaluations: search.ledger.evaluations,
         wall_seconds: search.clock.seconds(),
         resolution: dims.to_string(),
         best_fitness: search.best().outcome.fitness(),

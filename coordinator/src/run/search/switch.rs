@@ -33,9 +33,9 @@ impl Search {
         let switch_affordable = config
             .budget
             .evaluations
-            .is_none_or(|max| max.saturating_sub(self.evaluations) >= reevaluations as u64);
+            .is_none_or(|max| max.saturating_sub(self.ledger.evaluations) >= reevaluations as u64);
         let mut next = self.resolution.clone();
-        let switch = next.observe(watched, self.evaluations, schedule);
+        let switch = next.observe(watched, self.ledger.evaluations, schedule);
         if switch && !switch_affordable {
             self.switch_unaffordable = true;
             return Ok(());
@@ -51,12 +51,18 @@ impl Search {
         self.finest_checked = None;
         self.checked_best = f64::NEG_INFINITY;
         let dims = schedule.dims(self.resolution.level);
-        info!(epoch = self.epoch, resolution = %dims, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
+        info!(epoch = self.ledger.epoch, resolution = %dims, "re-evaluating at the next resolution (progress stalled, or resolution.latest_switch reached)");
         let genomes: Vec<Vec<Genome>> = (self.islands.iter())
             .map(|island| island.population.iter().map(|i| i.genome.clone()).collect())
             .collect();
-        let outcomes =
-            evaluate_settled(self, evaluator, &genomes, dims, Purpose::Reevaluation, ctx)?;
+        let outcomes = evaluate_settled(
+            &mut self.ledger,
+            evaluator,
+            &genomes,
+            dims,
+            Purpose::Reevaluation,
+            ctx,
+        )?;
         for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
             for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
                 ind.outcome = outcome;
