@@ -2,6 +2,7 @@
 //! overrides (`--set`) and its search preset laid under it, validated into a [`RunConfig`] before
 //! anything runs. Every error is one line naming the key.
 
+mod export;
 mod overrides;
 mod preset;
 
@@ -17,8 +18,8 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
 use crate::cluster::settings::ClusterSettings;
-pub use crate::results::ExportSection;
 use crate::search::{LocalSearchParams, MigrationParams, ResolutionSchedule};
+pub use export::ExportSection;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {

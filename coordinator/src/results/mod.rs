@@ -26,5 +26,5 @@ mod plots;
 mod report;
 mod writer;
 
-pub use finishing::{ExportSection, FinerCheck};
+pub use finishing::FinerCheck;
 pub use writer::ResultWriter;
