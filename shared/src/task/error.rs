@@ -50,19 +50,6 @@ pub fn finite(field: &str, value: f64) -> Result<(), SceneError> {
     }
 }
 
-/// Checks a scene's palette and genome limits, naming the one at fault.
-pub fn palette_and_limits(
-    palette: &crate::material::Palette,
-    limits: &crate::genome::GenomeLimits,
-) -> Result<(), SceneError> {
-    palette
-        .validate()
-        .map_err(|e| SceneError::new("palette", e.to_string()))?;
-    limits
-        .validate()
-        .map_err(|e| SceneError::new("limits", e.to_string()))
-}
-
 /// Checks a peer's voxel counts against the grid: 1 to `dims.cell_count()` voxels, one count per
 /// palette material, adding up to the total.
 pub fn counts_fit(

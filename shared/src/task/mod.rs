@@ -10,6 +10,7 @@
 
 pub mod beam;
 pub mod cantilever;
+mod design_space;
 mod error;
 mod kindless;
 pub mod locomotion;
@@ -23,6 +24,7 @@ use std::path::Path;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
+pub use design_space::DesignSpace;
 pub use error::SceneError;
 
 use crate::dynamics::DynamicScene;
@@ -96,12 +98,20 @@ pub trait Task {
     fn load_files(&mut self, _base_dir: &Path) -> Result<(), SceneError> {
         Ok(())
     }
+    /// The genome space: palette, limits and threshold, as the scene's keys give them.
+    fn design_space(&self) -> DesignSpace<'_>;
     /// The materials genome indices refer to.
-    fn palette(&self) -> &Palette;
+    fn palette(&self) -> &Palette {
+        self.design_space().palette
+    }
     /// Ranges and size limit a genome must respect.
-    fn limits(&self) -> &GenomeLimits;
+    fn limits(&self) -> &GenomeLimits {
+        self.design_space().limits
+    }
     /// Total-density threshold of the voxelization.
-    fn threshold(&self) -> f64;
+    fn threshold(&self) -> f64 {
+        self.design_space().threshold
+    }
     /// Edge length of one voxel at resolution `dims`, m.
     fn voxel_size(&self, dims: GridDims) -> f64;
     /// Whether the task can be evaluated at `dims` (a reason if not).

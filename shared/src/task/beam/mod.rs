@@ -14,10 +14,11 @@ pub use scene::{BeamMetrics, BeamScene};
 pub use target::{NamedProfile, TargetProfile};
 
 use super::cantilever::check_cantilever_dims;
-use super::{Artefact, Figure, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome};
+use super::{
+    Artefact, DesignSpace, Figure, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome,
+};
 use crate::dynamics::DynamicScene;
-use crate::genome::{Genome, GenomeLimits};
-use crate::material::Palette;
+use crate::genome::Genome;
 use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
 
@@ -46,16 +47,12 @@ impl Task for BeamScene {
         }
     }
 
-    fn palette(&self) -> &Palette {
-        &self.palette
-    }
-
-    fn limits(&self) -> &GenomeLimits {
-        &self.limits
-    }
-
-    fn threshold(&self) -> f64 {
-        self.threshold
+    fn design_space(&self) -> DesignSpace<'_> {
+        DesignSpace {
+            palette: &self.palette,
+            limits: &self.limits,
+            threshold: self.threshold,
+        }
     }
 
     /// The beam is a physical length along Y: the voxel size is that over the layer count.

@@ -9,7 +9,6 @@ use crate::material::Palette;
 use crate::statics::StaticSolverParams;
 use crate::task::SceneError;
 use crate::task::cantilever::check_load_case;
-use crate::task::error::palette_and_limits;
 use crate::voxel::DEFAULT_THRESHOLD;
 
 /// Everything a beam evaluation needs besides the genome and the resolution.
@@ -65,7 +64,7 @@ impl BeamScene {
 
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
-        palette_and_limits(&self.palette, &self.limits)?;
+        crate::task::Task::design_space(self).validate()?;
         self.target.validate()?;
         check_load_case(self.length, self.tip_load, &self.solver, self.threshold)
     }

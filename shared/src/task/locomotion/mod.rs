@@ -22,9 +22,8 @@ pub use scene::{LocomotionMetrics, LocomotionScene};
 pub use starts::Starts;
 pub use trajectory::{trajectory_csv, trajectory_plot};
 
-use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
-use crate::genome::{Genome, GenomeLimits};
-use crate::material::Palette;
+use super::{Artefact, DesignSpace, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use crate::genome::Genome;
 use crate::outcome::Failure;
 use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_largest_component};
@@ -45,16 +44,12 @@ impl Task for LocomotionScene {
         LocomotionScene::validate(self)
     }
 
-    fn palette(&self) -> &Palette {
-        &self.palette
-    }
-
-    fn limits(&self) -> &GenomeLimits {
-        &self.limits
-    }
-
-    fn threshold(&self) -> f64 {
-        self.threshold
+    fn design_space(&self) -> DesignSpace<'_> {
+        DesignSpace {
+            palette: &self.palette,
+            limits: &self.limits,
+            threshold: self.threshold,
+        }
     }
 
     /// The robot's size is the workspace: the voxel size is that over the longest count.

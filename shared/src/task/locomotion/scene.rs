@@ -9,7 +9,7 @@ use crate::dynamics::{DynamicScene, foam_palette};
 use crate::genome::GenomeLimits;
 use crate::material::Palette;
 use crate::task::SceneError;
-use crate::task::error::{finite, palette_and_limits, positive};
+use crate::task::error::{finite, positive};
 use crate::voxel::{DEFAULT_THRESHOLD, GridDims};
 
 /// Everything a locomotion evaluation needs besides the genome and the resolution.
@@ -85,9 +85,8 @@ impl Default for LocomotionScene {
 impl LocomotionScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
-        palette_and_limits(&self.palette, &self.limits)?;
+        crate::task::Task::design_space(self).validate()?;
         positive("workspace", self.workspace)?;
-        finite("threshold", self.threshold)?;
         finite("heading_degrees", self.heading_degrees)?;
         if !(self.incline_degrees.is_finite() && self.incline_degrees.abs() < 90.0) {
             return Err(SceneError::new(

@@ -13,9 +13,8 @@ pub use evaluate::simulate_stiffness;
 pub use scene::{StiffnessMetrics, StiffnessScene};
 
 use super::cantilever::check_cantilever_dims;
-use super::{Artefact, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
-use crate::genome::{Genome, GenomeLimits};
-use crate::material::Palette;
+use super::{Artefact, DesignSpace, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use crate::genome::Genome;
 use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
 
@@ -35,16 +34,12 @@ impl Task for StiffnessScene {
         StiffnessScene::validate(self)
     }
 
-    fn palette(&self) -> &Palette {
-        &self.palette
-    }
-
-    fn limits(&self) -> &GenomeLimits {
-        &self.limits
-    }
-
-    fn threshold(&self) -> f64 {
-        self.threshold
+    fn design_space(&self) -> DesignSpace<'_> {
+        DesignSpace {
+            palette: &self.palette,
+            limits: &self.limits,
+            threshold: self.threshold,
+        }
     }
 
     fn voxel_size(&self, dims: GridDims) -> f64 {

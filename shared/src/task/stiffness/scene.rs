@@ -9,7 +9,6 @@ use crate::material::Palette;
 use crate::statics::StaticSolverParams;
 use crate::task::SceneError;
 use crate::task::cantilever::check_load_case;
-use crate::task::error::palette_and_limits;
 use crate::voxel::DEFAULT_THRESHOLD;
 
 /// Everything a stiffness evaluation needs besides the genome and the resolution.
@@ -52,7 +51,7 @@ impl Default for StiffnessScene {
 impl StiffnessScene {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), SceneError> {
-        palette_and_limits(&self.palette, &self.limits)?;
+        crate::task::Task::design_space(self).validate()?;
         if usize::from(self.hard_material) >= self.palette.len() {
             return Err(SceneError::new(
                 "hard_material",
