@@ -31,29 +31,9 @@ cleanup() {
 trap cleanup EXIT
 log() { echo "fault-tests: $*"; }
 
-# A beam run long enough to break things in the middle (~0.3 s per evaluation, 2 workers).
-cat > "$AMORPH_CONFIG" <<'TOML'
-name = "ft"
-seed = 5
-[search]
-population = 10
-islands = 2
-children_per_epoch = 6
-initial_points = 20
-[search.migration]
-interval = 2
-[budget]
-evaluations = 360
-[resolution]
-levels = [[12, 40, 12]]
-[cluster]
-heartbeat_ms = 200
-lease_ms = 2000
-worker_timeout_ms = 1000
-[scene]
-kind = "beam"
-target = "circular_arc"
-TOML
+# A beam run long enough to break things in the middle (~0.3 s per evaluation, 2 workers): the
+# test fixture, copied where the containers mount it (/config/run.toml).
+cp "$root/tests/fixtures/configs/fault_beam.toml" "$AMORPH_CONFIG"
 
 "$root/deploy/stage.sh" "$profile" >/dev/null
 AMORPH_RESULTS=/tmp compose -p amorphft build >/dev/null 2>&1 || AMORPH_RESULTS=/tmp compose -p amorphft build

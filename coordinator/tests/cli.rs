@@ -20,29 +20,35 @@ fn write_config(name: &str, text: &str) -> std::path::PathBuf {
     path
 }
 
-const GOOD: &str = r#"
-name = "cli"
-[search]
-population = 4
-children_per_epoch = 3
-[budget]
-evaluations = 10
-[resolution]
-levels = [[4, 12, 4]]
-[scene]
-kind = "beam"
-target = "straight"
-"#;
+/// The smallest straight-beam run, the base config the workspace's tests share.
+const GOOD: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../tests/fixtures/configs/cli_straight.toml"
+);
+
+fn good_text() -> String {
+    std::fs::read_to_string(GOOD).expect("the cli_straight fixture")
+}
+
+/// `--set results_dir=<dir>`, as TOML.
+fn results_dir(dir: &std::path::Path) -> String {
+    format!("results_dir={:?}", dir.display().to_string())
+}
 
 #[test]
 fn a_misspelt_key_is_one_line_naming_it() {
-    let path = write_config("misspelt.toml", &GOOD.replace("evaluations", "evalutions"));
+    let text = good_text().replace("evaluations", "evalutions");
+    let line = 1 + text
+        .lines()
+        .position(|l| l.starts_with("evalutions"))
+        .unwrap();
+    let path = write_config("misspelt.toml", &text);
     let (ok, stderr) = coordinator(&["--config", path.to_str().unwrap()]);
     assert!(!ok);
     let errors: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
     assert_eq!(errors.len(), 1, "{stderr}");
     assert!(
-        errors[0].contains("evalutions") && errors[0].contains("line 7"),
+        errors[0].contains("evalutions") && errors[0].contains(&format!("line {line}:")),
         "{stderr}"
     );
 }
@@ -57,16 +63,10 @@ fn a_missing_config_file_is_named() {
 #[test]
 fn a_small_run_completes_and_reports_its_results_folder() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-results");
-    let text = format!("results_dir = \"{}\"\n{GOOD}", dir.display());
-    let path = write_config("good.toml", &text);
+    let set_dir = results_dir(&dir);
     let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
-        .args([
-            "--config",
-            path.to_str().unwrap(),
-            "--local-workers",
-            "2",
-            "--fresh",
-        ])
+        .args(["--config", GOOD, "--set", &set_dir])
+        .args(["--local-workers", "2", "--fresh"])
         .output()
         .unwrap();
     assert!(
@@ -80,7 +80,7 @@ fn a_small_run_completes_and_reports_its_results_folder() {
     assert!(dir.join("cli").join("run.sqlite").is_file());
 
     // Running it again would overwrite a finished run: refused, naming the store and the ways on.
-    let (ok, stderr) = coordinator(&["--config", path.to_str().unwrap()]);
+    let (ok, stderr) = coordinator(&["--config", GOOD, "--set", &set_dir]);
     assert!(!ok);
     let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
     assert_eq!(errors.len(), 1, "{stderr}");
@@ -96,7 +96,7 @@ fn a_small_run_completes_and_reports_its_results_folder() {
 fn a_beam_resolution_lying_on_its_side_is_refused_with_the_fix() {
     let path = write_config(
         "sideways.toml",
-        &GOOD.replace("levels = [[4, 12, 4]]", "levels = [[4, 4, 12]]"),
+        &good_text().replace("levels = [[4, 12, 4]]", "levels = [[4, 4, 12]]"),
     );
     let (ok, stderr) = coordinator(&["--config", path.to_str().unwrap()]);
     assert!(!ok);
@@ -112,11 +112,10 @@ fn a_beam_resolution_lying_on_its_side_is_refused_with_the_fix() {
 #[test]
 fn set_overrides_a_key_and_is_recorded() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-set");
-    let text = format!("results_dir = \"{}\"\n{GOOD}", dir.display());
-    let path = write_config("set.toml", &text);
-    let path = path.to_str().unwrap();
+    let path = GOOD;
     let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
         .args(["--config", path, "--fresh", "--local-workers", "1"])
+        .args(["--set", &results_dir(&dir)])
         .args([
             "--set",
             "budget.evaluations=12",

@@ -1,7 +1,7 @@
-//! End-to-end test harness: run configurations built in code, each in its own temporary results
-//! folder, through the same code the `coordinator` and `worker` binaries run: in one process
-//! (the reference), as an in-process cluster on 127.0.0.1:0 with workers the test starts and kills,
-//! or as real processes.
+//! End-to-end test harness: run configurations built from the base files in `fixtures/configs/`
+//! ([`test_config`]), each in its own temporary results folder, through the same code the
+//! `coordinator` and `worker` binaries run: in one process (the reference), as an in-process
+//! cluster on 127.0.0.1:0 with workers the test starts and kills, or as real processes.
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use amorph_coordinator::config::Override;
 use amorph_coordinator::job::{JobError, JobOptions, StoreMode, run_job};
 use amorph_coordinator::progress::Progress;
 use amorph_coordinator::store::RunStore;
@@ -30,57 +31,40 @@ pub fn scratch_dir(test: &str) -> PathBuf {
     dir
 }
 
-/// A small beam run at 4x12x4 (then 6x20x6 when it stalls), written to `results_dir`. Cluster
-/// timings are short so lost workers are noticed within a second.
-pub fn small_beam_config(results_dir: &Path, evaluations: u64, seed: u64) -> RunConfig {
-    let text = format!(
-        r#"
-name = "small"
-seed = {seed}
-results_dir = "{dir}"
-[search]
-population = 12
-islands = 2
-children_per_epoch = 8
-initial_points = 20
-[search.migration]
-interval = 2
-[budget]
-evaluations = {evaluations}
-[resolution]
-levels = [[4, 12, 4], [6, 20, 6]]
-stall_epochs = 3
-[cluster]
-local_workers = 0
-heartbeat_ms = 100
-lease_ms = 1500
-worker_timeout_ms = 600
-[scene]
-kind = "beam"
-target = "circular_arc"
-"#,
-        dir = results_dir.display()
-    );
-    RunConfig::parse(&text, Path::new("small.toml")).expect("valid test config")
+/// The base run configs tests start from: `tests/fixtures/configs/<base>.toml`, each a complete
+/// config (see the comment on its first line).
+pub fn fixture_config(base: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/configs")
+        .join(format!("{base}.toml"))
 }
 
-/// A circular-arc beam run of `sections` (TOML) in `results_dir`, evaluated in the process. Its
-/// search starts from the paper's preset unless `sections` names one, so that a test's keys are
-/// the only operators beyond the paper's.
-pub fn circular_arc(name: &str, seed: u64, results_dir: &Path, sections: &str) -> RunConfig {
-    let sections = if sections.contains("preset =") {
-        sections.to_owned()
-    } else if sections.contains("[search]\n") {
-        sections.replacen("[search]\n", "[search]\npreset = \"paper\"\n", 1)
-    } else {
-        format!("[search]\npreset = \"paper\"\n{sections}")
-    };
-    let text = format!(
-        "name = \"{name}\"\nseed = {seed}\nresults_dir = \"{dir}\"\n{sections}\n\
-         [cluster]\nlocal_workers = 0\n[scene]\nkind = \"beam\"\ntarget = \"circular_arc\"\n",
-        dir = results_dir.display()
-    );
-    RunConfig::parse(&text, Path::new(&format!("{name}.toml"))).expect("valid test config")
+/// The base config `base` (a file in `tests/fixtures/configs/`) with `sets` applied as the
+/// coordinator's `--set key=value` would (`"search.population=10"`, `"resolution.levels=[[4, 12,
+/// 4]]"`, `"search.migration.topology={ kind = \"ring\" }"`), before its preset and validation,
+/// writing to `results_dir`.
+pub fn test_config(base: &str, results_dir: &Path, sets: &[&str]) -> RunConfig {
+    let overrides: Vec<Override> = (sets.iter())
+        .map(|s| s.parse().unwrap_or_else(|e| panic!("{base}: {e}")))
+        .collect();
+    let mut config = RunConfig::load_with(&fixture_config(base), &overrides)
+        .unwrap_or_else(|e| panic!("{base}: {e}"));
+    config.results_dir = results_dir.to_owned();
+    config
+}
+
+/// A small beam run (`small_beam.toml`: 4x12x4, then 6x20x6 when it stalls, on the product's
+/// default search) of `evaluations` from `seed`, written to `results_dir`. Cluster timings are
+/// short so lost workers are noticed within a second.
+pub fn small_beam_config(results_dir: &Path, evaluations: u64, seed: u64) -> RunConfig {
+    test_config(
+        "small_beam",
+        results_dir,
+        &[
+            &format!("seed={seed}"),
+            &format!("budget.evaluations={evaluations}"),
+        ],
+    )
 }
 
 /// Runs a config in this process on `threads` evaluation threads: the reference every cluster
@@ -246,6 +230,13 @@ impl TestWorker {
     pub fn kill(self) {
         self.task.abort();
         self.runtime.shutdown_background();
+    }
+
+    /// Asks the worker to stop as SIGTERM does (it stops leasing, finishes or hands back what it
+    /// holds) and waits for it.
+    pub fn stop(self) -> Result<WorkerSummary, ClientError> {
+        let _ = self.stop.send(true);
+        self.join()
     }
 
     /// Waits for the worker to end on its own (the run finished, or it was refused).

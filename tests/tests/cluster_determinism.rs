@@ -65,6 +65,9 @@ fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
     assert!(survivor.join().is_ok());
 }
 
+/// A worker that connects to a run already under way finishes it, and the result is the
+/// in-process one. The early worker leaves first (as on SIGTERM, handing back what it holds), so
+/// the run waits for the late worker however slowly it starts.
 #[test]
 fn a_worker_that_connects_late_joins_the_run() {
     let expected = reference();
@@ -72,10 +75,15 @@ fn a_worker_that_connects_late_joins_the_run() {
     let run = ClusterRun::start(&config, 0, None);
     let early = TestWorker::start(&run.url(), 1, None);
     run.wait_for_evaluations(EVALUATIONS / 4, Duration::from_secs(120));
+    let early = early.stop().unwrap();
+    assert!(early.evaluated > 0);
+    assert!(
+        run.evaluations() < EVALUATIONS,
+        "the early worker left mid-run"
+    );
     let late = TestWorker::start(&run.url(), 1, None);
     let summary = run.join();
     assert_eq!(fingerprint(&summary), expected);
-    assert!(early.join().unwrap().evaluated > 0);
     assert!(
         late.join().unwrap().evaluated > 0,
         "the late worker got work"
@@ -359,6 +367,10 @@ fn tls_with_a_token_runs_and_plain_http_is_refused() {
     let mut config = small_beam_config(&dir, 60, SEED);
     config.cluster.tls_cert = Some(cert_path.clone());
     config.cluster.tls_key = Some(key_path);
+    // At the finish the coordinator serves until every worker has heard, for at most the worker
+    // timeout: on a loaded machine the small config's 0.6 s can pass before the TLS worker's next
+    // call, which then finds a closed port and fails after its retries.
+    config.cluster.worker_timeout_ms = 5_000;
 
     // No local worker: the external TLS worker must do every evaluation, so the run cannot end
     // before it has connected. (With a local worker the run could finish first; the TLS worker,

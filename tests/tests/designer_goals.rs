@@ -1,6 +1,7 @@
-//! Goals a designer writes. Every config in `configs/` loads; the stiffness task evolves
-//! a design that beats the layouts beam theory ranks below the I-beam; a custom profile runs end
-//! to end and is labelled as custom in the summary and report.
+//! Goals a designer writes. Every config in `configs/` (and every base config the tests start
+//! from) loads; the stiffness task evolves a design that beats the layouts beam theory ranks below
+//! the I-beam; a custom profile runs end to end and is labelled as custom in the summary and
+//! report.
 
 use std::path::Path;
 
@@ -8,7 +9,7 @@ use amorph::material::MaterialId;
 use amorph::task::{Metrics, Scene, Task};
 use amorph::voxel::{GridDims, VoxelGrid};
 use amorph_coordinator::RunConfig;
-use amorph_tests::{run_locally, scratch_dir};
+use amorph_tests::{run_locally, scratch_dir, test_config};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -33,34 +34,32 @@ fn every_config_in_configs_loads_and_survives_its_own_effective_config() {
     assert_eq!(seen, 12, "the configs a user chooses from");
 }
 
+/// Every base config the tests start from (`tests/fixtures/configs/`, read by
+/// `amorph_tests::test_config` and `deploy/fault-tests.sh`) loads as it stands, and its first line
+/// says what it is for.
+#[test]
+fn every_test_fixture_config_loads_and_says_what_it_is_for() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/configs");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        RunConfig::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.lines().next().is_some_and(|l| l.starts_with("# ")),
+            "{}: the first line says what the config is for",
+            path.display()
+        );
+        seen += 1;
+    }
+    assert!(seen >= 7, "the fixtures the tests use: {seen}");
+}
+
 fn stiffness_config(results_dir: &Path) -> RunConfig {
-    let text = format!(
-        r#"
-name = "stiff"
-seed = 3
-results_dir = "{dir}"
-[search]
-population = 24
-islands = 2
-children_per_epoch = 24
-initial_points = 40
-[search.migration]
-interval = 3
-[search.local_search]
-fraction = 0.25
-points = 0
-step = 0.005
-[budget]
-evaluations = 6000
-[resolution]
-levels = [[5, 16, 5]]
-[scene]
-kind = "stiffness"
-max_hard_fraction = 0.3
-"#,
-        dir = results_dir.display()
-    );
-    RunConfig::parse(&text, Path::new("stiff.toml")).expect("valid test config")
+    test_config("stiffness", results_dir, &[])
 }
 
 /// A full-workspace layout: hard where `hard` says, soft elsewhere.
@@ -124,27 +123,7 @@ fn an_evolved_stiff_design_beats_a_top_slab_and_a_random_layout_of_its_budget() 
 #[test]
 fn a_custom_profile_runs_and_is_reported_as_custom() {
     let dir = scratch_dir("custom-profile");
-    let text = format!(
-        r#"
-name = "custom"
-seed = 2
-results_dir = "{dir}"
-[search]
-population = 8
-islands = 1
-children_per_epoch = 8
-initial_points = 16
-[budget]
-evaluations = 40
-[resolution]
-levels = [[4, 12, 4]]
-[scene]
-kind = "beam"
-target = {{ points = [[0.0, 0.0], [0.3, 0.05], [0.7, 0.6], [1.0, 1.0]] }}
-"#,
-        dir = dir.display()
-    );
-    let config = RunConfig::parse(&text, Path::new("custom.toml")).unwrap();
+    let config = test_config("custom_points", &dir, &[]);
     run_locally(&config, 2);
     let json: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(config.run_dir().join("summary.json")).unwrap(),

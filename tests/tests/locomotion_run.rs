@@ -7,7 +7,7 @@ use amorph::dynamics::{FrictionLaw, LinkPrecision};
 use amorph::task::locomotion::LocomotionScene;
 use amorph::task::{Metrics, Scene};
 use amorph_coordinator::RunConfig;
-use amorph_tests::{ClusterRun, run_locally, scratch_dir};
+use amorph_tests::{ClusterRun, run_locally, scratch_dir, test_config};
 
 mod report_check;
 
@@ -15,32 +15,7 @@ mod report_check;
 /// checks the plumbing (scene parsing, evaluation, outcomes, results) in seconds, not the physics
 /// (which `shared/tests/dynamics_*.rs` check against analytic references).
 fn tiny_locomotion_config(results_dir: &Path, seed: u64) -> RunConfig {
-    let text = format!(
-        r#"
-name = "tiny-walker"
-seed = {seed}
-results_dir = "{dir}"
-[search]
-population = 6
-islands = 2
-children_per_epoch = 4
-initial_points = 12
-[budget]
-evaluations = 20
-[resolution]
-levels = [[4, 4, 4]]
-[scene]
-kind = "locomotion"
-workspace = 0.008
-actuation_cycles = 2
-[scene.settle]
-max_time = 0.02
-[scene.dynamics.actuation]
-period = 0.02
-"#,
-        dir = results_dir.display()
-    );
-    RunConfig::parse(&text, Path::new("tiny.toml")).expect("valid test config")
+    test_config("locomotion_tiny", results_dir, &[&format!("seed={seed}")])
 }
 
 /// `cluster.threads_per_evaluation`: the coordinator's local workers run each evaluation inside a

@@ -13,35 +13,33 @@ use amorph_coordinator::{
     Evaluator, LocalEvaluator, RunConfig, RunContext, RunSummary, StopReason, Task, run,
 };
 use amorph_tests::{
-    ClusterRun, TestWorker, circular_arc, fingerprint, resume_locally, run_locally, scratch_dir,
+    ClusterRun, TestWorker, fingerprint, resume_locally, run_locally, scratch_dir, test_config,
     thread_count_blind,
 };
 
 /// Two islands on the circular arc, 4×12×4 then 6×18×6 with the stall rule watching the finest
 /// grid.
 fn finest_config(results_dir: &Path, evaluations: u64) -> RunConfig {
-    let sections = format!(
-        r#"
-[search]
-preset = "paper"
-population = 8
-islands = 2
-children_per_epoch = 6
-initial_points = 40
-[search.local_search]
-fraction = 0.5
-step = 0.02
-shared = true
-[budget]
-evaluations = {evaluations}
-[resolution]
-levels = [[4, 12, 4], [6, 18, 6]]
-stall_epochs = 3
-min_improvement = 0.02
-stall_on_finest = true
-"#
-    );
-    circular_arc("finest", 5, results_dir, &sections)
+    test_config(
+        "circular_arc",
+        results_dir,
+        &[
+            "name=finest",
+            "seed=5",
+            "search.population=8",
+            "search.islands=2",
+            "search.children_per_epoch=6",
+            "search.initial_points=40",
+            "search.local_search.fraction=0.5",
+            "search.local_search.step=0.02",
+            "search.local_search.shared=true",
+            &format!("budget.evaluations={evaluations}"),
+            "resolution.levels=[[4, 12, 4], [6, 18, 6]]",
+            "resolution.stall_epochs=3",
+            "resolution.min_improvement=0.02",
+            "resolution.stall_on_finest=true",
+        ],
+    )
 }
 
 /// `resolution.stall_on_finest`: at the coarse level the run's best is evaluated at the finest

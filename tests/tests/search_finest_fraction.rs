@@ -6,7 +6,7 @@
 use amorph::genome::Genome;
 use amorph_coordinator::RunConfig;
 use amorph_tests::{
-    circular_arc, fingerprint, resume_locally, run_locally, scratch_dir, thread_count_blind,
+    fingerprint, resume_locally, run_locally, scratch_dir, test_config, thread_count_blind,
 };
 use rusqlite::Connection;
 use std::path::Path;
@@ -14,29 +14,26 @@ use std::path::Path;
 /// Three islands on two levels sharing one climb (with insertions, no combination, so that
 /// every nudge is one move of the best), switching by `latest_switch` at 100 evaluations.
 fn config(results_dir: &Path, finest: Option<f64>, evaluations: u64) -> RunConfig {
-    let finest = finest.map_or(String::new(), |f| format!("finest_fraction = {f}"));
-    let sections = format!(
-        r#"
-[search]
-population = 6
-islands = 3
-children_per_epoch = 6
-initial_points = 12
-[search.local_search]
-fraction = 0.5
-{finest}
-step = 0.02
-insertion = 0.3
-shared = true
-[budget]
-evaluations = {evaluations}
-[resolution]
-levels = [[3, 9, 3], [4, 12, 4]]
-stall_epochs = 1000
-latest_switch = [100]
-"#
-    );
-    circular_arc("finest-fraction", 5, results_dir, &sections)
+    let evaluations = format!("budget.evaluations={evaluations}");
+    let mut sets = vec![
+        "name=finest-fraction",
+        "seed=5",
+        "search.population=6",
+        "search.islands=3",
+        "search.children_per_epoch=6",
+        "search.initial_points=12",
+        "search.local_search.fraction=0.5",
+        "search.local_search.step=0.02",
+        "search.local_search.insertion=0.3",
+        "search.local_search.shared=true",
+        &evaluations,
+        "resolution.levels=[[3, 9, 3], [4, 12, 4]]",
+        "resolution.stall_epochs=1000",
+        "resolution.latest_switch=[100]",
+    ];
+    let finest = finest.map(|f| format!("search.local_search.finest_fraction={f}"));
+    sets.extend(finest.as_deref());
+    test_config("circular_arc", results_dir, &sets)
 }
 
 /// `(epoch, purpose, genome, outcome)` of an evaluation.

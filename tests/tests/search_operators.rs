@@ -5,34 +5,38 @@
 
 use amorph::genome::Genome;
 use amorph_coordinator::RunConfig;
-use amorph_tests::{circular_arc, fingerprint, resume_locally, run_locally, scratch_dir};
+use amorph_tests::{fingerprint, resume_locally, run_locally, scratch_dir, test_config};
 use std::path::Path;
 
-fn config(results_dir: &Path, seed: u64, local_search: &str) -> RunConfig {
-    let sections = format!(
-        r#"
-[search]
-preset = "paper"
-population = 10
-islands = 3
-children_per_epoch = 10
-initial_points = 20
-[search.migration]
-interval = 2
-topology = {{ kind = "ring" }}
-replacement = "most_similar"
-[search.local_search]
-fraction = 0.3
-step = 0.02
-{local_search}
-[budget]
-evaluations = 240
-[resolution]
-levels = [[4, 12, 4]]
-"#
-    );
-    circular_arc("operators", seed, results_dir, &sections)
+/// Three islands on the circular arc's paper search with nudges of the best and ring migration into
+/// the most similar slot; `local_search` adds its keys (`--set` style).
+fn config(results_dir: &Path, seed: u64, local_search: &[&str]) -> RunConfig {
+    let seed = format!("seed={seed}");
+    let mut sets = vec![
+        "name=operators",
+        &seed,
+        "search.population=10",
+        "search.islands=3",
+        "search.children_per_epoch=10",
+        "search.initial_points=20",
+        "search.migration.interval=2",
+        "search.migration.topology={ kind = \"ring\" }",
+        "search.migration.replacement=most_similar",
+        "search.local_search.fraction=0.3",
+        "search.local_search.step=0.02",
+        "budget.evaluations=240",
+        "resolution.levels=[[4, 12, 4]]",
+    ];
+    sets.extend(local_search);
+    test_config("circular_arc", results_dir, &sets)
 }
+
+/// The shared, combined climb with insertions.
+const CLIMB: [&str; 3] = [
+    "search.local_search.insertion=0.5",
+    "search.local_search.shared=true",
+    "search.local_search.combine=true",
+];
 
 /// One climb fed by every island (`shared`, with insertions, the improving nudges of each epoch
 /// combined into one child of the next): the nudges of three islands go to the one holding the
@@ -41,9 +45,7 @@ levels = [[4, 12, 4]]
 #[test]
 fn a_shared_climb_is_bit_identical_on_1_and_3_threads_and_never_loses_the_best() {
     let dirs = [scratch_dir("shared-1"), scratch_dir("shared-3")];
-    let configs = dirs
-        .each_ref()
-        .map(|d| config(d, 7, "insertion = 0.5\nshared = true\ncombine = true"));
+    let configs = dirs.each_ref().map(|d| config(d, 7, &CLIMB));
     let one = run_locally(&configs[0], 1);
     let three = run_locally(&configs[1], 3);
     assert_eq!(one.evaluations, 240);
@@ -75,9 +77,8 @@ fn a_shared_climb_is_bit_identical_on_1_and_3_threads_and_never_loses_the_best()
 /// epoch.
 #[test]
 fn a_combined_climb_resumes_bit_identical() {
-    let climb = "insertion = 0.5\nshared = true\ncombine = true";
     let config = |dir: &Path| {
-        let mut config = config(dir, 7, climb);
+        let mut config = config(dir, 7, &CLIMB);
         config.search.local_search.fraction = 0.8;
         config
     };
@@ -96,7 +97,7 @@ fn a_combined_climb_resumes_bit_identical() {
 #[test]
 fn operators_are_bit_identical_on_1_and_3_threads_and_never_lose_an_islands_best() {
     let dirs = [scratch_dir("operators-1"), scratch_dir("operators-3")];
-    let configs = dirs.each_ref().map(|d| config(d, 5, ""));
+    let configs = dirs.each_ref().map(|d| config(d, 5, &[]));
     let one = run_locally(&configs[0], 1);
     let three = run_locally(&configs[1], 3);
     assert_eq!(one.evaluations, 240);

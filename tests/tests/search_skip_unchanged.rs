@@ -6,7 +6,7 @@
 use amorph_coordinator::summary::HistoryRow;
 use amorph_coordinator::{RunConfig, RunSummary, StopReason};
 use amorph_tests::{
-    circular_arc, fingerprint, resume_locally, run_locally, scratch_dir, thread_count_blind,
+    fingerprint, resume_locally, run_locally, scratch_dir, test_config, thread_count_blind,
 };
 use std::path::Path;
 
@@ -27,44 +27,40 @@ fn judged(
     target: Option<f64>,
     on_finest: bool,
 ) -> RunConfig {
-    let target = target.map_or(String::new(), |t| format!("target_rms_percent = {t}"));
-    let sections = format!(
-        r#"
-[search]
-population = 8
-islands = 3
-children_per_epoch = 8
-initial_points = 12
-skip_unchanged = {skip}
-[search.mutation]
-probability = 0.05
-step = 0.02
-[search.migration]
-interval = 3
-topology = {{ kind = "ring" }}
-replacement = "most_similar"
-[search.local_search]
-fraction = 0.5
-step = 0.01
-insertion = 0.3
-shared = true
-combine = true
-[budget]
-evaluations = {evaluations}
-{target}
-[resolution]
-levels = [[3, 9, 3], [4, 12, 4]]
-stall_epochs = 3
-min_improvement = 0.2
-stall_on_finest = {on_finest}
-"#
-    );
-    circular_arc(
-        if skip { "skipping" } else { "evaluating" },
-        5,
-        results_dir,
-        &sections,
-    )
+    let skip_unchanged = format!("search.skip_unchanged={skip}");
+    let budget = format!("budget.evaluations={evaluations}");
+    let stall_on_finest = format!("resolution.stall_on_finest={on_finest}");
+    let mut sets = vec![
+        if skip {
+            "name=skipping"
+        } else {
+            "name=evaluating"
+        },
+        "seed=5",
+        "search.population=8",
+        "search.islands=3",
+        "search.children_per_epoch=8",
+        "search.initial_points=12",
+        &skip_unchanged,
+        "search.mutation.probability=0.05",
+        "search.mutation.step=0.02",
+        "search.migration.interval=3",
+        "search.migration.topology={ kind = \"ring\" }",
+        "search.migration.replacement=most_similar",
+        "search.local_search.fraction=0.5",
+        "search.local_search.step=0.01",
+        "search.local_search.insertion=0.3",
+        "search.local_search.shared=true",
+        "search.local_search.combine=true",
+        &budget,
+        "resolution.levels=[[3, 9, 3], [4, 12, 4]]",
+        "resolution.stall_epochs=3",
+        "resolution.min_improvement=0.2",
+        &stall_on_finest,
+    ];
+    let target = target.map(|t| format!("budget.target_rms_percent={t}"));
+    sets.extend(target.as_deref());
+    test_config("circular_arc", results_dir, &sets)
 }
 
 /// The history both runs must share: every island after every epoch, but for when it ended (the

@@ -47,6 +47,10 @@ struct Cli {
     /// Workers inside this process, overriding `cluster.local_workers` (0: external workers only).
     #[arg(long)]
     local_workers: Option<usize>,
+    /// Only read and check the config (with its `--set`s and preset), print the effective
+    /// config.toml the run would record, and exit: nothing runs, nothing is written.
+    #[arg(long, conflicts_with = "health_check")]
+    check: bool,
     /// Log level when RUST_LOG is not set (error, warn, info, debug, trace).
     #[arg(long, default_value = "warn")]
     log: String,
@@ -82,6 +86,10 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         Some(path) => RunConfig::load_with(path, &cli.overrides)?,
         None => RunConfig::quickstart(&cli.overrides)?,
     };
+    if cli.check {
+        print!("{}", toml::to_string_pretty(&config.to_raw())?);
+        return Ok(());
+    }
     let shutdown = Arc::new(AtomicBool::new(false));
     stop_on_signal(shutdown.clone());
     let (tx, rx) = std::sync::mpsc::channel();
