@@ -5,7 +5,8 @@
 //! so the total energy may not rise above its start by more than 0.1 % of the gravitational
 //! energy of lifting the body by half a voxel (room for the O(ω dt) wobble of the symplectic
 //! integrator's shadow energy). With actuation, energy is pumped in, so the bound is on speed:
-//! no voxel faster than ten times the actuation's own surface speed.
+//! no voxel faster than what a stable response to the actuation allows (three times its surface
+//! speed, derived at the test).
 
 use amorph::dynamics::{Actuation, DampingParams, DynamicScene, Pass, Simulation};
 use amorph::material::{Material, MaterialId, Palette};
@@ -173,7 +174,16 @@ fn actuation_of_50_percent_volume() {
     sim.start_actuation();
     // Surface speed of the actuation: body size × linear amplitude × 2π/T.
     let linear_amplitude = 1.5_f64.cbrt() - 1.0;
-    let bound = 10.0 * 0.04 * linear_amplitude * 2.0 * std::f64::consts::PI / period;
+    let body = 0.04;
+    let surface_speed = body * linear_amplitude * 2.0 * std::f64::consts::PI / period;
+    // A bounded response: the body's first axial mode, c / 2L with c = √(E/ρ), is near 400 Hz,
+    // so the 20 Hz actuation drives it quasi-statically, amplified by 1 / (1 − (f/f₁)²). Starting
+    // from rest adds a free vibration of at most that surface speed (the velocity the
+    // quasi-static motion starts with), and friction can move the whole body no faster than its
+    // surfaces move: three surface speeds, amplified. A diverging integration passes any bound.
+    let first_mode = (1e6_f64 / 1000.0).sqrt() / (2.0 * body);
+    let amplification = 1.0 / (1.0 - (1.0 / period / first_mode).powi(2));
+    let bound = 3.0 * amplification * surface_speed;
     let steps = MIN_STEPS.max((2.0 * period / sim.dt()) as u64);
     for _ in 0..steps {
         sim.step().unwrap_or_else(|d| panic!("diverged: {d}"));
