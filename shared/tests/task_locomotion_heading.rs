@@ -104,15 +104,16 @@ fn a_steep_slope_rising_along_the_heading_slides_the_robot_back() {
             m.lateral
         );
     }
-    // A 10° slope is within the friction angle: no slide beyond what the gait does on level
-    // ground, so the robot's travel stays within its level-ground travel's magnitude.
-    let level = walk(&scene(0.0, 0.0), &body);
-    let gentle = walk(&scene(0.0, 10.0), &body);
-    assert!(
-        gentle.displacement.abs() <= 2.0 * level.displacement.abs() + 1e-4,
-        "{}",
-        gentle.displacement
-    );
+    // A 10° slope is within the friction angle (tan 10° = 0.18 < μ = 1): a body that does not
+    // actuate stays where it settled, as on level ground, to within the jitter of a body at rest
+    // (far below a micrometre, as above), where 50° moved it by millimetres.
+    let mut still = scene(0.0, 10.0);
+    if let Some(a) = still.dynamics.actuation.as_mut() {
+        a.amplitude_volume = 0.0;
+    }
+    let m = walk(&still, &body);
+    eprintln!("10° at rest: {}", m.displacement);
+    assert!(m.displacement.abs() < 1e-6, "{}", m.displacement);
 }
 
 #[test]
