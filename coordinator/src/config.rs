@@ -202,14 +202,15 @@ impl RunConfig {
                 ))
             })?;
         }
-        let raw: RawConfig = toml::from_str(&toml::to_string(&document).expect("a TOML table"))
-            .expect("checked above");
-        let preset = (document.get("search"))
-            .and_then(|s| s.get("preset"))
-            .map_or_else(
-                || Preset::for_scene_kind(raw.scene.kind()),
-                |_| raw.search.preset,
-            );
+        // The document parsed as a config above (the file alone, then after each override), so
+        // its preset and scene kind read without another pass through the whole config.
+        let preset = match document.get("search").and_then(|s| s.get("preset")) {
+            Some(named) => named.clone().try_into().expect("checked above"),
+            None => Preset::for_scene_kind(
+                (document["scene"].get("kind").and_then(toml::Value::as_str))
+                    .expect("checked above"),
+            ),
+        };
         preset::lay_under(&mut document, preset.defaults());
         let raw = toml::from_str(&toml::to_string(&document).expect("a TOML table")).map_err(
             |e: toml::de::Error| ConfigError::Invalid {
