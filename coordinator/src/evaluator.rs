@@ -10,6 +10,7 @@ use amorph::task::{Outcome, Scene};
 use amorph::voxel::GridDims;
 
 use crate::ids::{TaskId, WorkerId};
+use crate::principal::Principal;
 
 /// One genome to evaluate at one resolution of the run's scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,22 +37,38 @@ pub struct Completion {
 
 /// Whose word an outcome is, which decides whether it must be checked before it may change a
 /// population.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Origin {
     /// Evaluated in this process (its threads, its own local workers, or the coordinator).
     Trusted,
-    /// Reported by an outside worker: a claim until a second evaluation agrees.
-    Claim(WorkerId),
+    /// Reported by an outside worker: a claim until a second principal's evaluation agrees.
+    Claim(Claimant),
     /// No evaluation: `max_attempts` different workers gave errors, so the task failed.
     GaveUp,
 }
 
-/// An outside worker's outcome for a task, to be evaluated again elsewhere.
+/// The outside worker whose word an outcome is, and the principal (credential) behind it.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Claimant {
+    pub worker: WorkerId,
+    pub principal: Principal,
+}
+
+impl std::fmt::Display for Claimant {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.principal {
+            Principal::EarlierSession => f.write_str("earlier session"),
+            ref p => write!(f, "{} ({p})", self.worker),
+        }
+    }
+}
+
+/// An outside worker's outcome for a task, to be evaluated again by another principal.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Claim {
     pub task: Task,
     pub outcome: Outcome,
-    pub claimant: WorkerId,
+    pub claimant: Claimant,
 }
 
 /// What a check found: the outcome that holds and who was caught disagreeing with it.
@@ -63,7 +80,7 @@ pub struct Verdict {
     /// Who made the second evaluation (and the third, when a tie had to be broken).
     pub checker: String,
     /// Workers whose outcome for this task differs from the one that holds; now quarantined.
-    pub liars: Vec<WorkerId>,
+    pub liars: Vec<Claimant>,
 }
 
 impl Verdict {
@@ -107,7 +124,7 @@ pub trait Evaluator {
     /// Whether every outcome `worker` claims is checked, not only those that would change a
     /// population: it was caught disagreeing with a check, or the run checks every claim
     /// (`cluster.verify = "all"`).
-    fn doubts_every_claim_of(&self, _worker: WorkerId) -> bool {
+    fn doubts_every_claim_of(&self, _claimant: &Claimant) -> bool {
         false
     }
 

@@ -13,6 +13,7 @@ use tokio::sync::watch;
 use tracing::{info, warn};
 
 use crate::cluster::local::LocalWorker;
+use crate::cluster::credentials::Credentials;
 use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Verify};
 use crate::config::RunConfig;
 use crate::progress::Progress;
@@ -97,6 +98,10 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
         Some(t) => Some(t),
         None => section.token().map_err(config_error)?,
     };
+    let credentials = match &section.credentials_file {
+        Some(path) => Credentials::load(path).map_err(|e| config_error(e.to_string()))?,
+        None => Credentials::default(),
+    };
     // The network side needs little CPU: two runtime threads leave the cores to the evaluations.
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -111,6 +116,7 @@ pub fn run_job(config: &RunConfig, options: JobOptions) -> Result<RunSummary, Jo
     let server_options = ServerOptions {
         listen: settings.listen.clone(),
         token: token.clone(),
+        credentials,
         tls: settings.tls.clone(),
         trust_everyone: settings.verify == Verify::Off,
     };

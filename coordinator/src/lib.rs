@@ -7,6 +7,7 @@ pub mod config;
 pub mod evaluator;
 pub use amorph_proto::ids;
 pub mod job;
+pub mod principal;
 pub mod progress;
 pub mod results;
 pub mod run;

@@ -16,8 +16,9 @@ use amorph::task::Outcome;
 use amorph::voxel::GridDims;
 use tracing::warn;
 
-use crate::evaluator::{Claim, Evaluator, EvaluatorError, Task, Verdict};
+use crate::evaluator::{Claim, Claimant, Evaluator, EvaluatorError, Task, Verdict};
 use crate::ids::{TaskId, WorkerId};
+use crate::principal::Principal;
 use crate::store::StoreError;
 
 /// One evaluated task of a batch, as the search receives it.
@@ -27,15 +28,18 @@ pub struct Evaluated {
     pub outcome: Outcome,
     /// The outside worker whose unchecked word `outcome` is; `None` once checked, or when this
     /// process evaluated it.
-    pub claimant: Option<WorkerId>,
+    pub claimant: Option<Claimant>,
 }
 
 /// For a batch as it stands, which outcomes would change a population, grouped like the batch.
 pub type Decisive<'a> = &'a dyn Fn(&[Vec<Evaluated>]) -> Vec<Vec<bool>>;
 
-/// The claimant of an unchecked outcome an earlier session of the run stored: no live worker, so
-/// any worker may make its check.
-pub const EARLIER_SESSION: WorkerId = WorkerId { serial: 0, tag: 0 };
+/// The claimant of an unchecked outcome an earlier session of the run stored: any outside
+/// principal may have made it, so this process makes its check.
+pub const EARLIER_SESSION: Claimant = Claimant {
+    worker: WorkerId { serial: 0, tag: 0 },
+    principal: Principal::EarlierSession,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum VerificationError {
@@ -63,7 +67,7 @@ pub fn confirm(
         let mut claims = Vec::new();
         for (g, group) in batch.iter().enumerate() {
             for (i, e) in group.iter().enumerate() {
-                let Some(claimant) = e.claimant else { continue };
+                let Some(claimant) = &e.claimant else { continue };
                 if deciding[g][i] || evaluator.doubts_every_claim_of(claimant) {
                     at.push((g, i));
                     claims.push(Claim {
@@ -73,7 +77,7 @@ pub fn confirm(
                             dims,
                         },
                         outcome: e.outcome.clone(),
-                        claimant,
+                        claimant: claimant.clone(),
                     });
                 }
             }
@@ -108,7 +112,7 @@ mod tests {
 
     /// An evaluator whose checks answer from a fixed truth: fitness = task id.
     struct Truth {
-        quarantined: Vec<WorkerId>,
+        quarantined: Vec<Claimant>,
         asked: Vec<TaskId>,
     }
 
@@ -133,40 +137,47 @@ mod tests {
                     let truth = scored(c.task.id.0 as f64);
                     let agreed = truth == c.outcome;
                     if !agreed {
-                        self.quarantined.push(c.claimant);
+                        self.quarantined.push(c.claimant.clone());
                     }
                     Verdict {
                         outcome: truth,
                         agreed,
                         checker: "truth".into(),
-                        liars: if agreed { vec![] } else { vec![c.claimant] },
+                        liars: if agreed {
+                            vec![]
+                        } else {
+                            vec![c.claimant.clone()]
+                        },
                     }
                 })
                 .collect())
         }
 
-        fn doubts_every_claim_of(&self, worker: WorkerId) -> bool {
-            self.quarantined.contains(&worker)
+        fn doubts_every_claim_of(&self, claimant: &Claimant) -> bool {
+            self.quarantined.contains(claimant)
         }
     }
 
     #[test]
     fn only_deciding_claims_are_checked_and_a_liars_other_claims_follow() {
-        let honest = WorkerId { serial: 1, tag: 7 };
-        let liar = WorkerId { serial: 2, tag: 7 };
-        let e = |task: u64, fitness: f64, claimant: Option<WorkerId>| Evaluated {
+        let claimant = |serial, name: &str| Claimant {
+            worker: WorkerId { serial, tag: 7 },
+            principal: Principal::Credential(name.into()),
+        };
+        let (honest, liar) = (claimant(1, "honest"), claimant(2, "liar"));
+        let e = |task: u64, fitness: f64, claimant: Option<&Claimant>| Evaluated {
             task: TaskId(task),
             outcome: scored(fitness),
-            claimant,
+            claimant: claimant.cloned(),
         };
         // Task 1: trusted. 2: honest claim that decides. 3: honest claim that does not.
         // 4: a lie that decides. 5: a lie that does not decide, found once 4 is caught.
         let mut batch = vec![vec![
             e(1, 1.0, None),
-            e(2, 2.0, Some(honest)),
-            e(3, 3.0, Some(honest)),
-            e(4, 40.0, Some(liar)),
-            e(5, 50.0, Some(liar)),
+            e(2, 2.0, Some(&honest)),
+            e(3, 3.0, Some(&honest)),
+            e(4, 40.0, Some(&liar)),
+            e(5, 50.0, Some(&liar)),
         ]];
         let genomes = vec![vec![Genome { points: vec![] }; 5]];
         let mut truth = Truth {
@@ -182,7 +193,7 @@ mod tests {
             &mut truth,
             &decide,
             &mut |claim, verdict| {
-                caught.extend(verdict.liars.iter().map(|&w| (w, claim.task.id)));
+                caught.extend(verdict.liars.iter().map(|w| (w.clone(), claim.task.id)));
                 Ok(())
             },
         )
@@ -191,10 +202,10 @@ mod tests {
         assert_eq!(truth.asked, [TaskId(2), TaskId(4), TaskId(5)]);
         for (i, e) in batch[0].iter().enumerate() {
             let task = i as u64 + 1;
-            let expected_claimant = (task == 3).then_some(honest);
+            let expected_claimant = (task == 3).then_some(honest.clone());
             assert_eq!(e.claimant, expected_claimant, "task {task}");
             assert_eq!(e.outcome, scored(task as f64), "task {task}");
         }
-        assert_eq!(caught, [(liar, TaskId(4)), (liar, TaskId(5))]);
+        assert_eq!(caught, [(liar.clone(), TaskId(4)), (liar, TaskId(5))]);
     }
 }

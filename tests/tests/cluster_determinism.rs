@@ -4,9 +4,9 @@
 
 use std::time::Duration;
 
-use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
 use amorph_proto::v1::{self, task_result};
 use amorph_proto::{PROTOCOL_VERSION, convert};
+use amorph_tests::peer::{Peer, client, runtime};
 use amorph_tests::{
     ClusterRun, TestWorker, fingerprint, run_locally, scratch_dir, small_beam_config,
 };
@@ -99,29 +99,16 @@ fn regression_a_worker_between_two_calls_hears_that_the_run_finished() {
     let run = ClusterRun::start(&config, 2, None);
     let rt = runtime();
     let heard = rt.block_on(async {
-        let mut c = client(&run.url()).await;
-        let worker_id = c
-            .register(v1::RegisterRequest {
-                protocol_version: PROTOCOL_VERSION,
-                capacity: 1,
-                name: "bystander".into(),
-            })
-            .await
-            .unwrap()
-            .into_inner()
-            .worker_id;
+        let c = client(&run.url(), None).await;
+        let mut bystander = Peer::register(&c, 1, "bystander").await.unwrap();
         for beat in 0.. {
             // Under the config's 600 ms worker timeout, so the coordinator keeps it registered.
             tokio::time::sleep(Duration::from_millis(250)).await;
-            let answer = c
-                .heartbeat(v1::HeartbeatRequest {
-                    worker_id: worker_id.clone(),
-                    active_task_ids: Vec::new(),
-                    protocol_version: PROTOCOL_VERSION,
-                })
+            let answer = bystander
+                .heartbeat(&[])
                 .await
                 .unwrap_or_else(|e| panic!("heartbeat {beat}: {e:?}"));
-            if answer.into_inner().run_finished {
+            if answer.run_finished {
                 return beat;
             }
             assert!(beat < 2_000, "no end of the run after {beat} heartbeats");
@@ -154,16 +141,15 @@ fn a_wrong_token_or_protocol_version_is_refused_and_the_run_goes_on() {
 
     let rt = runtime();
     let status = rt.block_on(async {
-        let mut client = client(&run.url()).await;
-        let mut request = tonic::Request::new(v1::RegisterRequest {
-            protocol_version: PROTOCOL_VERSION + 1,
-            capacity: 1,
-            name: "future".into(),
-        });
-        request
-            .metadata_mut()
-            .insert("authorization", "Bearer s3cret".parse().unwrap());
-        client.register(request).await.unwrap_err()
+        let mut client = client(&run.url(), Some("s3cret")).await;
+        client
+            .register(v1::RegisterRequest {
+                protocol_version: PROTOCOL_VERSION + 1,
+                capacity: 1,
+                name: "future".into(),
+            })
+            .await
+            .unwrap_err()
     });
     assert_eq!(status.code(), Code::FailedPrecondition);
     assert!(status.message().contains("protocol version"), "{status:?}");
@@ -181,25 +167,8 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
     let run = ClusterRun::start(&config, 0, None);
     let rt = runtime();
     rt.block_on(async {
-        let mut c = client(&run.url()).await;
-        let id = c
-            .register(v1::RegisterRequest {
-                protocol_version: PROTOCOL_VERSION,
-                capacity: 2,
-                name: "hostile".into(),
-            })
-            .await
-            .unwrap()
-            .into_inner()
-            .worker_id;
-        let report = |worker: &str, task_id: u64, result: task_result::Result| v1::ReportRequest {
-            worker_id: worker.into(),
-            results: vec![v1::TaskResult {
-                task_id,
-                result: Some(result),
-                wall_seconds: 0.0,
-            }],
-        };
+        let c = client(&run.url(), None).await;
+        let mut hostile = Peer::register(&c, 2, "hostile").await.unwrap();
         let empty = convert::outcome_to_wire(&amorph::task::Outcome::failed(
             amorph::outcome::Failure::Empty,
         ));
@@ -207,70 +176,35 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
         // A probe's lease (long-polling until the first batch is queued) makes sure task 1
         // exists before it is reported: without it the report raced the first submit and could
         // get NOT_FOUND instead of FAILED_PRECONDITION.
-        let probe = c
-            .register(v1::RegisterRequest {
-                protocol_version: PROTOCOL_VERSION,
-                capacity: 1,
-                name: "probe".into(),
-            })
-            .await
-            .unwrap()
-            .into_inner()
-            .worker_id;
-        let mut probed = Vec::new();
-        while probed.is_empty() {
-            probed = c
-                .lease(v1::LeaseRequest {
-                    worker_id: probe.clone(),
-                    max_tasks: 1,
-                    wait_ms: 1000,
-                })
-                .await
-                .unwrap()
-                .into_inner()
-                .tasks;
-        }
+        let mut probe = Peer::register(&c, 1, "probe").await.unwrap();
+        let probed = probe.lease(1).await;
         assert_eq!(probed[0].task_id, 1);
 
         // Unknown task id; a task that exists but was never leased to us; an unknown worker.
-        let s = c
-            .report(report(
-                &id,
-                999_999,
-                task_result::Result::Outcome(empty.clone()),
-            ))
+        let s = hostile
+            .report(999_999, task_result::Result::Outcome(empty.clone()))
             .await
             .unwrap_err();
         assert_eq!(s.code(), Code::NotFound, "{s:?}");
         assert!(s.message().contains("999999"), "{s:?}");
-        let s = c
-            .report(report(&id, 1, task_result::Result::Outcome(empty.clone())))
+        let s = hostile
+            .report(1, task_result::Result::Outcome(empty.clone()))
             .await
             .unwrap_err();
         assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
         assert!(s.message().contains("never leased"), "{s:?}");
-        let s = c
-            .heartbeat(v1::HeartbeatRequest {
-                worker_id: "w1-forged".into(),
-                active_task_ids: vec![],
-                protocol_version: PROTOCOL_VERSION,
-            })
-            .await
-            .unwrap_err();
+        let s = Peer {
+            id: "w1-forged".into(),
+            ..hostile.clone()
+        }
+        .heartbeat(&[])
+        .await
+        .unwrap_err();
         assert_eq!(s.code(), Code::NotFound, "{s:?}");
 
         // Lease two tasks, answer one with a NaN fitness and one with garbage metrics: both are
         // refused as this worker's errors and go back to the queue.
-        let tasks = c
-            .lease(v1::LeaseRequest {
-                worker_id: id.clone(),
-                max_tasks: 2,
-                wait_ms: 2000,
-            })
-            .await
-            .unwrap()
-            .into_inner()
-            .tasks;
+        let tasks = hostile.try_lease(2, 2000).await.unwrap();
         assert_eq!(tasks.len(), 2);
         let nan = v1::Outcome {
             result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
@@ -284,10 +218,8 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
                 metrics_json: b"\xff\xfe".to_vec(),
             })),
         };
-        let reply = c
-            .report(v1::ReportRequest {
-                worker_id: id.clone(),
-                results: vec![
+        let reply = hostile
+            .report_all(vec![
                     v1::TaskResult {
                         task_id: tasks[0].task_id,
                         result: Some(task_result::Result::Outcome(nan)),
@@ -298,35 +230,31 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
                         result: Some(task_result::Result::Outcome(garbage)),
                         wall_seconds: 1.0,
                     },
-                ],
-            })
+                ])
             .await
-            .unwrap()
-            .into_inner();
+            .unwrap();
         assert_eq!(
             reply.dispositions,
             vec![v1::ReportDisposition::Rejected as i32; 2]
         );
 
         // An oversized message is refused by the size limit before any handler runs.
-        let huge = v1::ReportRequest {
-            worker_id: id.clone(),
-            results: vec![v1::TaskResult {
+        let huge = vec![v1::TaskResult {
                 task_id: tasks[0].task_id,
                 result: Some(task_result::Result::Error(
                     "x".repeat(amorph_proto::MAX_MESSAGE_BYTES + 1),
                 )),
                 wall_seconds: 0.0,
-            }],
-        };
+            }];
         // One defined status: the server refuses it from the length prefix, before reading it.
-        let s = c.report(huge).await.unwrap_err();
+        let s = hostile.report_all(huge).await.unwrap_err();
         assert_eq!(s.code(), Code::OutOfRange, "{s:?}");
         assert!(s.message().contains("too large"), "{s:?}");
         // A scene that is not the run's.
-        let s = c
+        let s = hostile
+            .client
             .fetch_scene(v1::FetchSceneRequest {
-                worker_id: id.clone(),
+                worker_id: hostile.id.clone(),
                 scene_id: "scene-0000".into(),
             })
             .await
@@ -340,20 +268,6 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
     let summary = run.join();
     assert_eq!(fingerprint(&summary), expected);
     assert!(honest.join().is_ok());
-}
-
-fn runtime() -> tokio::runtime::Runtime {
-    tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .unwrap()
-}
-
-async fn client(url: &str) -> EvaluationCoordinatorClient<tonic::transport::Channel> {
-    EvaluationCoordinatorClient::connect(url.to_owned())
-        .await
-        .unwrap()
-        .max_encoding_message_size(2 * amorph_proto::MAX_MESSAGE_BYTES)
 }
 
 #[test]

@@ -4,19 +4,16 @@
 
 use std::time::{Duration, Instant};
 
-use amorph_proto::v1::evaluation_coordinator_client::EvaluationCoordinatorClient;
 use amorph_proto::v1::{self, task_result};
 use amorph_proto::{PROTOCOL_VERSION, convert};
+use amorph_tests::peer::{Peer, client, forged, runtime, swapped};
 use amorph_tests::{
     ClusterRun, TestWorker, fingerprint, run_locally, scratch_dir, small_beam_config,
 };
 use tonic::Code;
-use tonic::transport::Channel;
 
 const EVALUATIONS: u64 = 120;
 const SEED: u64 = 12;
-
-type Client = EvaluationCoordinatorClient<Channel>;
 
 /// The clean run every attacked run must end equal to, computed once per test process (the tests
 /// run in parallel and would otherwise share its results folder).
@@ -32,110 +29,6 @@ fn reference() -> String {
         .clone()
 }
 
-fn runtime() -> tokio::runtime::Runtime {
-    tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .unwrap()
-}
-
-async fn client(url: &str) -> Client {
-    EvaluationCoordinatorClient::connect(url.to_owned())
-        .await
-        .unwrap()
-        .max_encoding_message_size(2 * amorph_proto::MAX_MESSAGE_BYTES)
-}
-
-async fn register(c: &mut Client, capacity: u32, name: &str) -> String {
-    c.register(v1::RegisterRequest {
-        protocol_version: PROTOCOL_VERSION,
-        capacity,
-        name: name.into(),
-    })
-    .await
-    .unwrap()
-    .into_inner()
-    .worker_id
-}
-
-/// Leases until `n` tasks are held (the first batch may not be queued yet): waits for
-/// readiness with the lease call's own long poll, never a blind sleep.
-async fn lease(c: &mut Client, worker: &str, n: usize) -> Vec<v1::Task> {
-    let start = Instant::now();
-    let mut tasks = Vec::new();
-    while tasks.len() < n {
-        assert!(start.elapsed() < Duration::from_secs(30), "no work in 30 s");
-        tasks.extend(
-            c.lease(v1::LeaseRequest {
-                worker_id: worker.into(),
-                max_tasks: (n - tasks.len()) as u32,
-                wait_ms: 1000,
-            })
-            .await
-            .unwrap()
-            .into_inner()
-            .tasks,
-        );
-    }
-    tasks
-}
-
-/// Waits until the coordinator has dropped `worker` as silent (and so re-queued its leases):
-/// `Release` answers NOT_FOUND then, and unlike every other call does not count as a sign of
-/// life.
-async fn wait_until_dropped(c: &mut Client, worker: &str) {
-    let start = Instant::now();
-    loop {
-        let r = c
-            .release(v1::ReleaseRequest {
-                worker_id: worker.into(),
-                task_ids: vec![],
-            })
-            .await;
-        match r {
-            Err(s) if s.code() == Code::NotFound => return,
-            _ => assert!(start.elapsed() < Duration::from_secs(30), "never dropped"),
-        }
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
-}
-
-fn report(worker: &str, task_id: u64, result: task_result::Result) -> v1::ReportRequest {
-    v1::ReportRequest {
-        worker_id: worker.into(),
-        results: vec![v1::TaskResult {
-            task_id,
-            result: Some(result),
-            wall_seconds: 0.0,
-        }],
-    }
-}
-
-/// The honest outcome of a leased task, computed here as a worker would.
-async fn evaluate(c: &mut Client, task: &v1::Task) -> v1::Outcome {
-    let scene = c
-        .fetch_scene(v1::FetchSceneRequest {
-            worker_id: String::new(),
-            scene_id: task.scene_id.clone(),
-        })
-        .await
-        .unwrap()
-        .into_inner();
-    let scene = convert::scene_from_wire(&scene.scene_json).unwrap();
-    let genome = convert::genome_from_wire(task.genome.as_ref().unwrap()).unwrap();
-    let dims = convert::dims_from_wire(task.resolution.as_ref()).unwrap();
-    convert::outcome_to_wire(&scene.evaluate(&genome, dims))
-}
-
-fn forged() -> v1::Outcome {
-    v1::Outcome {
-        result: Some(v1::outcome::Result::Evaluated(v1::Evaluated {
-            fitness: 0.0,
-            metrics_json: b"{}".to_vec(),
-        })),
-    }
-}
-
 /// An outcome is a claim checked against what the run's scene can produce. A beam profile station
 /// at x = -1.7e308 (finite, so it decodes) would crash the end of the run in the plot code, and
 /// again on every resume; a fitness better than the design's own profile would change the result.
@@ -146,11 +39,11 @@ fn regression_an_outcome_the_scene_cannot_produce_is_refused() {
     let config = small_beam_config(&scratch_dir("hostile-implausible"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
     runtime().block_on(async {
-        let mut c = client(&run.url()).await;
-        let liar = register(&mut c, 2, "liar").await;
-        let held = lease(&mut c, &liar, 2).await;
+        let c = client(&run.url(), None).await;
+        let mut liar = Peer::register(&c, 2, "liar").await.unwrap();
+        let held = liar.lease(2).await;
         for (k, task) in held.iter().enumerate() {
-            let honest = evaluate(&mut c, task).await;
+            let honest = liar.evaluate(task).await;
             let Some(v1::outcome::Result::Evaluated(e)) = honest.result else {
                 continue; // a failed design has no numbers to forge
             };
@@ -167,17 +60,15 @@ fn regression_an_outcome_the_scene_cannot_produce_is_refused() {
                     metrics_json: e.metrics_json.clone(),
                 }
             };
-            let r = c
-                .report(report(
-                    &liar,
+            let r = liar
+                .report(
                     task.task_id,
                     task_result::Result::Outcome(v1::Outcome {
                         result: Some(v1::outcome::Result::Evaluated(forged)),
                     }),
-                ))
+                )
                 .await
-                .unwrap()
-                .into_inner();
+                .unwrap();
             assert_eq!(
                 r.dispositions,
                 [v1::ReportDisposition::Rejected as i32],
@@ -199,36 +90,23 @@ fn regression_a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
     let config = small_beam_config(&scratch_dir("hostile-late"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
     runtime().block_on(async {
-        let mut c = client(&run.url()).await;
-        let slow = register(&mut c, 4, "slow").await;
-        let held = lease(&mut c, &slow, 4).await;
+        let c = client(&run.url(), None).await;
+        let mut slow = Peer::register(&c, 4, "slow").await.unwrap();
+        let held = slow.lease(4).await;
         // Silent: dropped after worker_timeout, its four leases back in the queue.
-        wait_until_dropped(&mut c, &slow).await;
-        let late = evaluate(&mut c, &held[0]).await;
-        let r = c
-            .report(report(
-                &slow,
-                held[0].task_id,
-                task_result::Result::Outcome(late),
-            ))
-            .await
-            .unwrap()
-            .into_inner();
+        slow.wait_until_dropped().await;
+        let late = slow.evaluate(&held[0]).await;
+        let r = slow.report(held[0].task_id, task_result::Result::Outcome(late)).await
+            .unwrap();
         assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
 
-        let forger = register(&mut c, 4, "forger").await;
-        let got = lease(&mut c, &forger, 4).await;
+        let mut forger = Peer::register(&c, 4, "forger").await.unwrap();
+        let got = forger.lease(4).await;
         assert!(
             got.iter().all(|t| t.task_id != held[0].task_id),
             "a finished task was leased again"
         );
-        let s = c
-            .report(report(
-                &forger,
-                held[0].task_id,
-                task_result::Result::Outcome(forged()),
-            ))
-            .await
+        let s = forger.report(held[0].task_id, task_result::Result::Outcome(forged())).await
             .unwrap_err();
         assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
     });
@@ -246,38 +124,25 @@ fn regression_one_worker_cannot_fail_a_task_by_repeating_errors() {
     let config = small_beam_config(&scratch_dir("hostile-errors"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
     runtime().block_on(async {
-        let mut c = client(&run.url()).await;
-        let liar = register(&mut c, 1, "liar").await;
-        let task = lease(&mut c, &liar, 1).await.remove(0);
+        let c = client(&run.url(), None).await;
+        let mut liar = Peer::register(&c, 1, "liar").await.unwrap();
+        let task = liar.lease(1).await.remove(0);
         let error = || v1::TaskResult {
             task_id: task.task_id,
             result: Some(task_result::Result::Error("out of memory".into())),
             wall_seconds: 0.0,
         };
-        let r = c
-            .report(v1::ReportRequest {
-                worker_id: liar.clone(),
-                results: vec![error(), error(), error()],
-            })
+        let r = liar
+            .report_all(vec![error(), error(), error()])
             .await
-            .unwrap()
-            .into_inner();
+            .unwrap();
         use v1::ReportDisposition::{Duplicate, ErrorNoted};
         assert_eq!(
             r.dispositions,
             [ErrorNoted as i32, Duplicate as i32, Duplicate as i32]
         );
         // Not leased to it again, though it has room and asks.
-        let again = c
-            .lease(v1::LeaseRequest {
-                worker_id: liar.clone(),
-                max_tasks: 1,
-                wait_ms: 0,
-            })
-            .await
-            .unwrap()
-            .into_inner()
-            .tasks;
+        let again = liar.try_lease(1, 0).await.unwrap();
         assert!(again.iter().all(|t| t.task_id != task.task_id));
     });
     let honest = TestWorker::start(&run.url(), 2, None);
@@ -293,15 +158,17 @@ fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
     let config = small_beam_config(&scratch_dir("hostile-malformed"), 60, SEED);
     let run = ClusterRun::start(&config, 0, None);
     runtime().block_on(async {
-        let mut c = client(&run.url()).await;
+        let c = client(&run.url(), None).await;
         // An empty report with no worker id names no worker, so it is not answered OK.
-        let s = c.report(v1::ReportRequest::default()).await.unwrap_err();
+        let s = c.clone().report(v1::ReportRequest::default()).await.unwrap_err();
         assert_eq!(s.code(), Code::NotFound, "{s:?}");
 
         let megabyte = format!("w1-\n\u{1b}[31m{}", "x".repeat(1 << 20));
         let s = c
+            .clone()
             .heartbeat(v1::HeartbeatRequest {
                 worker_id: megabyte,
+                session: String::new(),
                 active_task_ids: vec![],
                 protocol_version: PROTOCOL_VERSION,
             })
@@ -315,10 +182,12 @@ fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
         );
         assert!(!s.message().contains(['\n', '\u{1b}']), "{s:?}");
 
-        let id = register(&mut c, 1, "evil\nname\u{1b}[2J").await;
+        let mut id = Peer::register(&c, 1, "evil\nname\u{1b}[2J").await.unwrap();
         let s = c
+            .clone()
             .heartbeat(v1::HeartbeatRequest {
-                worker_id: id.clone(),
+                worker_id: id.id.clone(),
+                session: id.session.clone(),
                 active_task_ids: vec![],
                 protocol_version: PROTOCOL_VERSION + 1,
             })
@@ -329,15 +198,9 @@ fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
 
         // A task that exists but was leased to another worker: the probe's lease makes sure
         // the batch is queued (before, the test raced the first submit and could see NOT_FOUND).
-        let probe = register(&mut c, 1, "probe").await;
-        let t = lease(&mut c, &probe, 1).await.remove(0);
-        let s = c
-            .report(report(
-                &id,
-                t.task_id,
-                task_result::Result::Outcome(forged()),
-            ))
-            .await
+        let mut probe = Peer::register(&c, 1, "probe").await.unwrap();
+        let t = probe.lease(1).await.remove(0);
+        let s = id.report(t.task_id, task_result::Result::Outcome(forged())).await
             .unwrap_err();
         assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
         assert!(s.message().contains("never leased"), "{s:?}");
@@ -395,44 +258,29 @@ fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined()
     let config = small_beam_config(&scratch_dir("hostile-plausible"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
     let honest = runtime().block_on(async {
-        let mut c = client(&run.url()).await;
-        let liar = register(&mut c, 12, "liar").await;
-        let held = lease(&mut c, &liar, 12).await;
+        let c = client(&run.url(), None).await;
+        let mut liar = Peer::register(&c, 12, "liar").await.unwrap();
+        let held = liar.lease(12).await;
         let mut truths = Vec::new();
         for task in &held {
-            truths.push(evaluate(&mut c, task).await);
+            truths.push(liar.evaluate(task).await);
         }
         let mut forged = 0;
         for (k, task) in held.iter().enumerate() {
             // Another design's outcome where one differs (many random designs fail alike).
-            let claim = truths
-                .iter()
-                .find(|t| **t != truths[k])
-                .unwrap_or(&truths[k]);
-            forged += usize::from(*claim != truths[k]);
-            let r = c
-                .report(report(
-                    &liar,
-                    task.task_id,
-                    task_result::Result::Outcome(claim.clone()),
-                ))
+            let claim = swapped(&truths, k);
+            forged += usize::from(claim != truths[k]);
+            let r = liar
+                .report(task.task_id, task_result::Result::Outcome(claim))
                 .await
-                .unwrap()
-                .into_inner();
+                .unwrap();
             assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
         }
         assert!(forged > 0, "the designs all score alike: nothing to forge");
         let honest = TestWorker::start(&run.url(), 2, None);
         let start = Instant::now();
         loop {
-            let r = c
-                .lease(v1::LeaseRequest {
-                    worker_id: liar.clone(),
-                    max_tasks: 0,
-                    wait_ms: 0,
-                })
-                .await;
-            match r {
+            match liar.try_lease(0, 0).await {
                 Err(s) if s.code() == Code::PermissionDenied => break,
                 _ => assert!(
                     start.elapsed() < Duration::from_secs(60),
@@ -468,35 +316,25 @@ fn regression_with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
     let initial = (config.search.population * config.search.islands) as usize;
     let run = ClusterRun::start(&config, 0, None);
     let honest = runtime().block_on(async {
-        let mut c = client(&run.url()).await;
-        let liar = register(&mut c, initial as u32, "liar").await;
-        for task in lease(&mut c, &liar, initial).await {
-            let truth = evaluate(&mut c, &task).await;
-            let r = c
-                .report(report(
-                    &liar,
-                    task.task_id,
-                    task_result::Result::Outcome(truth),
-                ))
+        let c = client(&run.url(), None).await;
+        let mut liar = Peer::register(&c, initial as u32, "liar").await.unwrap();
+        for task in liar.lease(initial).await {
+            let truth = liar.evaluate(&task).await;
+            let r = liar
+                .report(task.task_id, task_result::Result::Outcome(truth))
                 .await
-                .unwrap()
-                .into_inner();
+                .unwrap();
             assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
         }
         // The first epoch's children: every one claimed a failure, whatever it really is.
-        let children = lease(&mut c, &liar, 4).await;
+        let children = liar.lease(4).await;
         let mut lies = 0;
         for task in &children {
             let failed = convert::outcome_to_wire(&amorph::task::Outcome::failed(
                 amorph::outcome::Failure::Empty,
             ));
-            lies += usize::from(evaluate(&mut c, task).await != failed);
-            c.report(report(
-                &liar,
-                task.task_id,
-                task_result::Result::Outcome(failed),
-            ))
-            .await
+            lies += usize::from(liar.evaluate(task).await != failed);
+            liar.report(task.task_id, task_result::Result::Outcome(failed)).await
             .unwrap();
         }
         assert!(lies > 0, "every child really failed: nothing was a lie");

@@ -17,8 +17,10 @@ use tracing_subscriber::EnvFilter;
 
 /// Evolves freeform multi-material designs (Hiller & Lipson 2012) and writes the results folder.
 #[derive(Debug, Parser)]
-#[command(version, about)]
+#[command(version, about, args_conflicts_with_subcommands = true)]
 struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
     /// The run configuration (TOML); see configs/ for examples. Without it: the quickstart
     /// (configs/quickstart.toml, compiled in).
     #[arg(long)]
@@ -56,6 +58,69 @@ struct Cli {
     log: String,
 }
 
+#[derive(Debug, clap::Subcommand)]
+enum Command {
+    /// Per-worker credentials: each is a principal of its own, so workers under different
+    /// credentials check each other's outcomes (docs/how-to/cluster.md).
+    #[command(subcommand)]
+    Credentials(CredentialsCommand),
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum CredentialsCommand {
+    /// Issues a credential: appends its digest to FILE and writes its token, readable by you
+    /// alone, to --token-out (default NAME.token beside FILE). Give that file to one worker:
+    /// `worker --connect URL --token-file NAME.token`.
+    Add {
+        name: String,
+        /// The credentials file (`cluster.credentials_file`); made if missing.
+        #[arg(long, default_value = "credentials")]
+        file: PathBuf,
+        #[arg(long)]
+        token_out: Option<PathBuf>,
+    },
+    /// Withdraws a credential (a running coordinator keeps it until restarted).
+    Remove {
+        name: String,
+        #[arg(long, default_value = "credentials")]
+        file: PathBuf,
+    },
+    /// Lists the credentials' names.
+    List {
+        #[arg(long, default_value = "credentials")]
+        file: PathBuf,
+    },
+}
+
+fn credentials(command: CredentialsCommand) -> anyhow::Result<()> {
+    use amorph_coordinator::cluster::credentials::{Credentials, default_token_path};
+    match command {
+        CredentialsCommand::Add {
+            name,
+            file,
+            token_out,
+        } => {
+            let out = token_out.unwrap_or_else(|| default_token_path(&file, &name));
+            Credentials::add(&file, &name, &out)?;
+            println!(
+                "credential {name} added to {}; its token is in {} (give it to that worker alone)",
+                file.display(),
+                out.display()
+            );
+        }
+        CredentialsCommand::Remove { name, file } => {
+            Credentials::remove(&file, &name)?;
+            println!("credential {name} removed from {}", file.display());
+        }
+        CredentialsCommand::List { file } => {
+            for name in Credentials::load(&file)?.names() {
+                println!("{name}");
+            }
+        }
+    }
+    Ok(())
+}
+
 fn parse_override(text: &str) -> Result<Override, String> {
     text.parse()
 }
@@ -72,6 +137,9 @@ fn main() -> std::process::ExitCode {
 }
 
 fn try_main(cli: Cli) -> anyhow::Result<()> {
+    if let Some(Command::Credentials(command)) = cli.command {
+        return credentials(command);
+    }
     if let Some(url) = &cli.health_check {
         return health_check(url);
     }

@@ -1,90 +1,250 @@
-//! Limits on the connections a peer may hold, applied before TLS and HTTP/2 see a byte: at most
-//! [`MAX_CONNECTIONS`] at once (the default file limit is 1,024, and SQLite, the workers'
-//! threads and the log need some), at most [`MAX_PER_ADDRESS`] from one IP address, and a
-//! connection that sends nothing for [`IDLE_TIMEOUT`] is closed. A connection over a limit is
-//! closed at once, so it never waits in the kernel's backlog holding a descriptor.
+//! Limits on the connections peers may hold, applied before TLS and HTTP/2 see a byte, and
+//! counted by who a connection proves to be:
+//! - at most [`MAX_CONNECTIONS`] at once (the default file limit is 1,024, and SQLite, the
+//!   workers' threads and the log need some) and [`MAX_PER_ADDRESS`] from one IP address;
+//! - a connection that has not made an authenticated call within [`HANDSHAKE_TIMEOUT`] is
+//!   closed, whether it answers the server's PINGs or not; at most [`MAX_PENDING`] such
+//!   connections wait at once ([`MAX_PENDING_PER_ADDRESS`] per address), and a new one pushes
+//!   out the oldest, so connections that never authenticate cannot keep a worker out;
+//! - once authenticated, a connection counts against its principal, at most
+//!   [`ConnectionLimits::per_principal`] each, so one credential cannot hold every slot;
+//! - a connection that sends nothing for the idle timeout is closed.
 //!
-//! An honest worker holds one connection and sends a heartbeat every `heartbeat_ms` (and the
-//! server pings every 10 s), so none of this touches it; 1,100 idle TCP connections, which made
-//! the coordinator unreachable for as long as they stayed open, now cost it at most 256
-//! descriptors for 30 s.
+//! A connection over a limit is closed at once, so it never waits in the kernel's backlog holding
+//! a descriptor. An honest worker holds one connection, authenticates on its first call and sends
+//! a heartbeat every `heartbeat_ms`, so none of this touches it.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::io;
-use std::net::IpAddr;
+use std::net::{IpAddr, SocketAddr};
 use std::pin::Pin;
-use std::sync::{Arc, Mutex};
-use std::task::{Context, Poll};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::task::{Context, Poll, Waker};
 use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::TcpStream;
 use tokio::time::{Instant, Sleep};
+use tonic::Status;
 use tonic::transport::server::{Connected, TcpConnectInfo};
 use tracing::warn;
 
-pub const MAX_CONNECTIONS: usize = 256;
-pub const MAX_PER_ADDRESS: usize = 64;
-pub const IDLE_TIMEOUT: Duration = Duration::from_secs(30);
+use crate::principal::Principal;
 
-/// Counts open connections, in all and per address.
+pub const MAX_CONNECTIONS: usize = 512;
+pub const MAX_PER_ADDRESS: usize = 64;
+pub const MAX_PENDING: usize = 64;
+pub const MAX_PENDING_PER_ADDRESS: usize = 16;
+pub const IDLE_TIMEOUT: Duration = Duration::from_secs(30);
+pub const HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// One admitted connection, shared by its stream and the table.
+#[derive(Debug)]
+struct Conn {
+    ip: IpAddr,
+    /// Order of admission, to push out the oldest waiting connection first.
+    serial: u64,
+    authenticated: AtomicBool,
+    /// Pushed out of the waiting connections: the next read fails.
+    evicted: AtomicBool,
+    waker: Mutex<Option<Waker>>,
+}
+
+impl Conn {
+    fn evict(&self) {
+        self.evicted.store(true, Ordering::Release);
+        if let Some(w) = self.waker.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            w.wake();
+        }
+    }
+}
+
 #[derive(Debug, Default)]
+struct Table {
+    per_ip: HashMap<IpAddr, (usize, usize)>,
+    by_addr: HashMap<SocketAddr, (Arc<Conn>, Option<Principal>)>,
+    /// Connections not yet authenticated, by admission order.
+    pending: BTreeMap<u64, SocketAddr>,
+    per_principal: HashMap<Principal, usize>,
+    next_serial: u64,
+}
+
+/// Counts open connections, in all, per address, waiting and per principal.
+#[derive(Debug)]
 pub struct ConnectionLimits {
-    open: Mutex<(usize, HashMap<IpAddr, usize>)>,
+    table: Mutex<Table>,
+    per_principal: usize,
+}
+
+impl Default for ConnectionLimits {
+    fn default() -> Self {
+        Self::new(MAX_CONNECTIONS)
+    }
 }
 
 impl ConnectionLimits {
-    /// Admits `stream` if both limits allow; the returned stream gives its place back when it
+    /// `per_principal`: most authenticated connections of one principal.
+    pub fn new(per_principal: usize) -> Self {
+        Self {
+            table: Mutex::default(),
+            per_principal,
+        }
+    }
+
+    pub fn per_principal(&self) -> usize {
+        self.per_principal
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Table> {
+        self.table.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Admits `stream` if the limits allow; the returned stream gives its place back when it
     /// closes. `None`: refused (and logged), the stream is dropped (closed) by the caller.
     pub fn admit(self: &Arc<Self>, stream: TcpStream, idle: Duration) -> Option<LimitedStream> {
-        let ip = stream.peer_addr().ok()?.ip();
-        let mut open = self.open.lock().unwrap_or_else(|e| e.into_inner());
-        let from_ip = open.1.get(&ip).copied().unwrap_or(0);
-        if open.0 >= MAX_CONNECTIONS || from_ip >= MAX_PER_ADDRESS {
-            let total = open.0;
-            drop(open);
+        let addr = stream.peer_addr().ok()?;
+        let ip = addr.ip();
+        let mut t = self.lock();
+        let (from_ip, pending_ip) = t.per_ip.get(&ip).copied().unwrap_or((0, 0));
+        if t.by_addr.len() >= MAX_CONNECTIONS || from_ip >= MAX_PER_ADDRESS {
+            let total = t.by_addr.len();
+            drop(t);
             warn!(peer = %ip, open = total, from_peer = from_ip, "connection refused: too many open");
             return None;
         }
-        open.0 += 1;
-        *open.1.entry(ip).or_insert(0) += 1;
-        drop(open);
+        // Over a waiting limit, the oldest waiting connection (of this address, or of any) makes
+        // room; it stays counted until its stream notices and closes.
+        let oldest = if pending_ip >= MAX_PENDING_PER_ADDRESS {
+            t.pending
+                .iter()
+                .find(|&(_, a)| a.ip() == ip)
+                .map(|(&serial, _)| serial)
+        } else if t.pending.len() >= MAX_PENDING {
+            t.pending.keys().next().copied()
+        } else {
+            None
+        };
+        if let Some(serial) = oldest
+            && let Some(addr) = t.pending.remove(&serial)
+        {
+            if let Some(e) = t.per_ip.get_mut(&addr.ip()) {
+                e.1 -= 1;
+            }
+            if let Some((conn, _)) = t.by_addr.get(&addr) {
+                warn!(peer = %addr, "connection that never authenticated pushed out by a new one");
+                conn.evict();
+            }
+        }
+        let serial = t.next_serial;
+        t.next_serial += 1;
+        let conn = Arc::new(Conn {
+            ip,
+            serial,
+            authenticated: AtomicBool::new(false),
+            evicted: AtomicBool::new(false),
+            waker: Mutex::new(None),
+        });
+        let entry = t.per_ip.entry(ip).or_default();
+        entry.0 += 1;
+        entry.1 += 1;
+        t.pending.insert(serial, addr);
+        t.by_addr.insert(addr, (conn.clone(), None));
+        drop(t);
         Some(LimitedStream {
             stream,
-            ip,
+            addr,
+            conn,
             limits: self.clone(),
             idle,
             deadline: Box::pin(tokio::time::sleep(idle)),
+            handshake: Some(Box::pin(tokio::time::sleep(HANDSHAKE_TIMEOUT))),
         })
     }
 
+    /// A call on the connection from `addr` proved `principal`: the connection stops waiting and
+    /// counts against the principal. Refused when the principal holds its limit already.
+    pub fn authenticated(&self, addr: Option<SocketAddr>, principal: &Principal) -> Result<(), Status> {
+        let Some(addr) = addr else { return Ok(()) };
+        let mut t = self.lock();
+        let Some((conn, owner)) = t.by_addr.get(&addr) else {
+            return Ok(()); // not a counted connection (served some other way)
+        };
+        if owner.is_some() {
+            return Ok(());
+        }
+        let conn = conn.clone();
+        let held = t.per_principal.get(principal).copied().unwrap_or(0);
+        if held >= self.per_principal {
+            drop(t);
+            warn!(peer = %addr, %principal, held, "connection refused: its credential holds its limit of connections");
+            return Err(Status::resource_exhausted(format!(
+                "{principal} holds {held} connections, its limit (cluster.max_workers_per_credential × 2)"
+            )));
+        }
+        *t.per_principal.entry(principal.clone()).or_default() += 1;
+        t.by_addr.get_mut(&addr).expect("looked up above").1 = Some(principal.clone());
+        t.pending.remove(&conn.serial);
+        if let Some(e) = t.per_ip.get_mut(&conn.ip) {
+            e.1 -= 1;
+        }
+        conn.authenticated.store(true, Ordering::Release);
+        Ok(())
+    }
+
     pub fn open(&self) -> usize {
-        self.open.lock().unwrap_or_else(|e| e.into_inner()).0
+        self.lock().by_addr.len()
+    }
+
+    fn close(&self, addr: SocketAddr) {
+        let mut t = self.lock();
+        let Some((conn, owner)) = t.by_addr.remove(&addr) else {
+            return;
+        };
+        let was_pending = t.pending.remove(&conn.serial).is_some();
+        if let Some(e) = t.per_ip.get_mut(&conn.ip) {
+            e.0 -= 1;
+            if was_pending {
+                e.1 -= 1;
+            }
+            if e.0 == 0 {
+                t.per_ip.remove(&conn.ip);
+            }
+        }
+        if let Some(p) = owner
+            && let Some(n) = t.per_principal.get_mut(&p)
+        {
+            *n -= 1;
+            if *n == 0 {
+                t.per_principal.remove(&p);
+            }
+        }
     }
 }
 
 /// A TCP stream holding one place in the limits; reading fails with `TimedOut` once the peer has
-/// sent nothing for the idle timeout, which makes the server close it.
+/// sent nothing for the idle timeout or has not authenticated within the handshake deadline,
+/// which makes the server close it.
 #[derive(Debug)]
 pub struct LimitedStream {
     stream: TcpStream,
-    ip: IpAddr,
+    addr: SocketAddr,
+    conn: Arc<Conn>,
     limits: Arc<ConnectionLimits>,
     idle: Duration,
     deadline: Pin<Box<Sleep>>,
+    /// Until the first authenticated call.
+    handshake: Option<Pin<Box<Sleep>>>,
 }
 
 impl Drop for LimitedStream {
     fn drop(&mut self) {
-        let mut open = self.limits.open.lock().unwrap_or_else(|e| e.into_inner());
-        open.0 -= 1;
-        if let Some(n) = open.1.get_mut(&self.ip) {
-            *n -= 1;
-            if *n == 0 {
-                open.1.remove(&self.ip);
-            }
-        }
+        self.limits.close(self.addr);
     }
+}
+
+fn timed_out(why: &'static str) -> Poll<io::Result<()>> {
+    Poll::Ready(Err(io::Error::new(io::ErrorKind::TimedOut, why)))
 }
 
 impl AsyncRead for LimitedStream {
@@ -93,6 +253,12 @@ impl AsyncRead for LimitedStream {
         cx: &mut Context<'_>,
         buf: &mut ReadBuf<'_>,
     ) -> Poll<io::Result<()>> {
+        if self.conn.evicted.load(Ordering::Acquire) {
+            return timed_out("pushed out by newer connections before authenticating");
+        }
+        if self.conn.authenticated.load(Ordering::Acquire) {
+            self.handshake = None;
+        }
         let before = buf.filled().len();
         match Pin::new(&mut self.stream).poll_read(cx, buf) {
             Poll::Ready(result) => {
@@ -102,13 +268,19 @@ impl AsyncRead for LimitedStream {
                 }
                 Poll::Ready(result)
             }
-            Poll::Pending => match self.deadline.as_mut().poll(cx) {
-                Poll::Ready(()) => Poll::Ready(Err(io::Error::new(
-                    io::ErrorKind::TimedOut,
-                    "peer idle for too long",
-                ))),
-                Poll::Pending => Poll::Pending,
-            },
+            Poll::Pending => {
+                *self.conn.waker.lock().unwrap_or_else(|e| e.into_inner()) =
+                    Some(cx.waker().clone());
+                if let Some(h) = self.handshake.as_mut()
+                    && h.as_mut().poll(cx).is_ready()
+                {
+                    return timed_out("no authenticated call within the handshake deadline");
+                }
+                match self.deadline.as_mut().poll(cx) {
+                    Poll::Ready(()) => timed_out("peer idle for too long"),
+                    Poll::Pending => Poll::Pending,
+                }
+            }
         }
     }
 }
@@ -163,39 +335,93 @@ mod tests {
         (client.unwrap(), server.unwrap().0)
     }
 
-    /// A peer cannot hold the coordinator's descriptors for as long as it likes: over the
-    /// per-address limit a connection is refused; an idle one times out; closing one gives its
-    /// place back.
-    #[tokio::test]
-    async fn regression_connections_are_limited_and_idle_ones_time_out() {
+    async fn read_error(stream: &mut LimitedStream) -> io::ErrorKind {
+        let mut byte = [0u8; 1];
+        stream.read(&mut byte).await.unwrap_err().kind()
+    }
+
+    /// Connections that never authenticate are few at a time per address, the oldest gives way
+    /// to a new one, and each is closed at the handshake deadline; closing one gives its place
+    /// back; an authenticated one counts against its principal.
+    #[tokio::test(start_paused = true)]
+    async fn connections_that_never_authenticate_cannot_hold_the_slots() {
         let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let limits = Arc::new(ConnectionLimits::default());
+        let limits = Arc::new(ConnectionLimits::new(2));
         let mut held = Vec::new();
-        for _ in 0..MAX_PER_ADDRESS {
+        for _ in 0..MAX_PENDING_PER_ADDRESS {
             let (client, server) = pair(&listener).await;
-            held.push((
-                client,
-                limits.admit(server, IDLE_TIMEOUT).expect("under the limit"),
-            ));
+            held.push((client, limits.admit(server, IDLE_TIMEOUT).expect("under the limit")));
         }
         let (_client, server) = pair(&listener).await;
-        assert!(
-            limits.admit(server, IDLE_TIMEOUT).is_none(),
-            "over the per-address limit"
-        );
-        assert_eq!(limits.open(), MAX_PER_ADDRESS);
-        held.pop();
+        let _newest = limits.admit(server, IDLE_TIMEOUT).expect("admitted");
         assert_eq!(
-            limits.open(),
-            MAX_PER_ADDRESS - 1,
-            "a closed connection gives its place back"
+            read_error(&mut held[0].1).await,
+            io::ErrorKind::TimedOut,
+            "the oldest waiting connection of this address made room"
         );
+        held.remove(0);
+        assert_eq!(limits.open(), MAX_PENDING_PER_ADDRESS, "a closed one gives its place back");
+        held.pop();
 
-        // A short timeout of its own, so the test waits a tenth of a second, not 30.
-        let (_client, server) = pair(&listener).await;
-        let mut idle = limits.admit(server, Duration::from_millis(100)).unwrap();
+        // Authenticated, a connection stops counting as waiting, and survives the deadline.
+        let (_c, server) = pair(&listener).await;
+        let mut worker = limits.admit(server, IDLE_TIMEOUT).unwrap();
+        let alice = Principal::Credential("alice".into());
+        limits.authenticated(Some(worker.addr), &alice).unwrap();
+        let (_c2, server) = pair(&listener).await;
+        let mut waiting = limits.admit(server, IDLE_TIMEOUT).expect("room again");
+        assert_eq!(read_error(&mut waiting).await, io::ErrorKind::TimedOut, "handshake deadline");
+        drop(waiting);
+        tokio::time::advance(HANDSHAKE_TIMEOUT).await;
         let mut byte = [0u8; 1];
-        let err = idle.read(&mut byte).await.unwrap_err();
-        assert_eq!(err.kind(), io::ErrorKind::TimedOut);
+        let alive = tokio::time::timeout(Duration::from_millis(10), worker.read(&mut byte)).await;
+        assert!(alive.is_err(), "an authenticated connection is still open (its read waits)");
+
+        // Per principal: two connections, not three.
+        let (_c3, server) = pair(&listener).await;
+        let second = limits.admit(server, IDLE_TIMEOUT).unwrap();
+        limits.authenticated(Some(second.addr), &alice).unwrap();
+        let (_c4, server) = pair(&listener).await;
+        let third = limits.admit(server, IDLE_TIMEOUT).unwrap();
+        let refused = limits.authenticated(Some(third.addr), &alice).unwrap_err();
+        assert_eq!(refused.code(), tonic::Code::ResourceExhausted);
+        limits
+            .authenticated(Some(third.addr), &Principal::Credential("bob".into()))
+            .expect("another credential has its own slots");
+    }
+
+    /// With every waiting slot taken, a new connection pushes out the oldest waiting one.
+    #[tokio::test]
+    async fn a_new_connection_pushes_out_the_oldest_waiting_one() {
+        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let limits = Arc::new(ConnectionLimits::new(8));
+        let oldest = {
+            let mut table = limits.lock();
+            // Fill the waiting slots as if from many addresses.
+            for i in 0..MAX_PENDING as u64 {
+                let addr: SocketAddr =
+                    format!("10.0.{}.{}:1", i / 200, i % 200 + 1).parse().unwrap();
+                let conn = Arc::new(Conn {
+                    ip: addr.ip(),
+                    serial: i,
+                    authenticated: AtomicBool::new(false),
+                    evicted: AtomicBool::new(false),
+                    waker: Mutex::new(None),
+                });
+                table.pending.insert(i, addr);
+                table.by_addr.insert(addr, (conn, None));
+            }
+            table.next_serial = MAX_PENDING as u64;
+            table.by_addr[&table.pending[&0]].0.clone()
+        };
+        let (_client, server) = pair(&listener).await;
+        let mut newest = limits.admit(server, IDLE_TIMEOUT).expect("admitted");
+        assert!(oldest.evicted.load(Ordering::Acquire), "the oldest was pushed out");
+        limits
+            .authenticated(Some(newest.addr), &Principal::Shared)
+            .unwrap();
+        let mut byte = [0u8; 1];
+        let alive = tokio::time::timeout(Duration::from_millis(50), newest.read(&mut byte)).await;
+        assert!(alive.is_err(), "the newest is open");
     }
 }

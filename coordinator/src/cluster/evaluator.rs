@@ -11,15 +11,17 @@ use amorph::task::{Outcome, Scene};
 use tracing::{info, warn};
 
 use super::queue::TaskQueue;
-use crate::evaluator::{Claim, Completion, Evaluator, EvaluatorError, Origin, Task, Verdict};
-use crate::ids::{TaskId, WorkerId};
+use crate::evaluator::{
+    Claim, Claimant, Completion, Evaluator, EvaluatorError, Origin, Task, Verdict,
+};
+use crate::ids::TaskId;
 
 #[derive(Debug)]
 pub struct ClusterEvaluator {
     queue: Arc<TaskQueue>,
     shutdown: Arc<AtomicBool>,
-    /// The run's scene, for the evaluations the coordinator makes itself: a check no other
-    /// worker may take, and the tie-break when a check disagrees with a claim.
+    /// The run's scene, for the evaluations the coordinator makes itself: a task no worker at
+    /// work may take, and the tie-break when a check disagrees with a claim.
     scene: Arc<Scene>,
     next_check: u64,
     /// Added to the search's task ids on the queue. The queue needs ids that increase from batch
@@ -72,9 +74,8 @@ impl ClusterEvaluator {
         self.stats
     }
 
-    /// Waits for one completion per task of the batch just submitted on `done`; in a batch of
-    /// checks, those no worker at work may take are evaluated here (a search batch has none, so
-    /// its wait does not scan the queue).
+    /// Waits for one completion per task of the batch just submitted on `done`; tasks no worker
+    /// at work may take (`TaskQueue::orphans`) are evaluated here meanwhile.
     fn collect(
         &mut self,
         tasks: &[Task],
@@ -83,7 +84,6 @@ impl ClusterEvaluator {
     ) -> Result<Vec<Completion>, EvaluatorError> {
         let mut completions: Vec<Option<Completion>> = vec![None; tasks.len()];
         let mut remaining = tasks.len();
-        let checks = tasks.first().is_some_and(|t| t.id.is_check());
         while remaining > 0 {
             match done.recv_timeout(Duration::from_millis(100)) {
                 Ok(completion) => {
@@ -101,17 +101,10 @@ impl ClusterEvaluator {
                             tasks.len()
                         )));
                     }
-                    let orphans = if checks {
-                        self.queue.orphan_checks(Instant::now())
-                    } else {
-                        Vec::new()
-                    };
-                    for task in orphans {
-                        let started = Instant::now();
-                        let outcome = self.scene.evaluate(&task.genome, task.dims);
-                        self.stats.by_coordinator += 1;
-                        self.queue
-                            .finish_here(task.id, outcome, started.elapsed().as_secs_f64());
+                    let orphans = self.queue.orphans(Instant::now());
+                    self.stats.by_coordinator += orphans.len() as u64;
+                    for (task, outcome, seconds) in self.evaluate_here(&orphans) {
+                        self.queue.finish_here(task, outcome, seconds);
                     }
                 }
                 Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
@@ -125,38 +118,60 @@ impl ClusterEvaluator {
             .collect())
     }
 
-    /// The outcome that holds when a check disagrees with a claim: a trusted checker's, else the
-    /// coordinator's own evaluation. Everyone whose outcome differs from it is quarantined.
-    fn settle(&mut self, claim: &Claim, check: &Completion) -> Verdict {
-        self.stats.disagreements += 1;
-        let (truth, checker) = match check.origin {
-            Origin::Trusted => (check.outcome.clone(), check.worker.clone()),
-            Origin::Claim(_) | Origin::GaveUp => {
-                self.stats.by_coordinator += 1;
-                let truth = self.scene.evaluate(&claim.task.genome, claim.task.dims);
-                (truth, format!("{}, then coordinator", check.worker))
-            }
-        };
+    /// Evaluates `tasks` on this process's cores, all at once.
+    fn evaluate_here(&self, tasks: &[Arc<Task>]) -> Vec<(TaskId, Outcome, f64)> {
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(tasks.len());
+        if threads == 0 {
+            return Vec::new();
+        }
+        let scene = &self.scene;
+        let per = tasks.len().div_ceil(threads);
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = tasks
+                .chunks(per)
+                .map(|chunk| {
+                    scope.spawn(move || {
+                        chunk
+                            .iter()
+                            .map(|t| {
+                                let started = Instant::now();
+                                let outcome = scene.evaluate(&t.genome, t.dims);
+                                (t.id, outcome, started.elapsed().as_secs_f64())
+                            })
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().expect("evaluations catch their own panics"))
+                .collect()
+        })
+    }
+
+    /// The coordinator's own evaluation of a claim both of whose witnesses are unproven: whoever
+    /// differs from it is quarantined.
+    fn settle(&mut self, claim: &Claim, check: &Completion) -> (Outcome, Vec<Claimant>) {
+        self.stats.by_coordinator += 1;
+        let truth = self.scene.evaluate(&claim.task.genome, claim.task.dims);
         let truth_text = outcome_text(&truth);
         let mut liars = Vec::new();
         if outcome_text(&claim.outcome) != truth_text {
-            liars.push(claim.claimant);
+            liars.push(claim.claimant.clone());
         }
-        if let Origin::Claim(w) = check.origin
+        if let Origin::Claim(w) = &check.origin
             && outcome_text(&check.outcome) != truth_text
         {
-            liars.push(w);
+            liars.push(w.clone());
         }
-        for &liar in &liars {
-            warn!(worker = %liar, task = %claim.task.id, "worker's outcome disagrees with the coordinator's own evaluation: quarantined");
-            self.queue.quarantine(liar);
-        }
-        Verdict {
-            outcome: truth,
-            agreed: false,
-            checker,
-            liars,
-        }
+        (truth, liars)
+    }
+
+    fn punish(&self, liar: &Claimant, task: TaskId) {
+        warn!(worker = %liar.worker, principal = %liar.principal, %task, "outcome disagrees with the one that holds: quarantined");
+        self.queue.quarantine(liar);
     }
 }
 
@@ -192,51 +207,104 @@ impl Evaluator for ClusterEvaluator {
         self.collect(tasks, &done, on_done)
     }
 
+    /// Each claim is evaluated again by a principal that may check its claimant's. Agreement to
+    /// the bit confirms it. On disagreement: a trusted checker's outcome holds; a checker caught
+    /// lying meanwhile is ignored and the claim checked again; a claimant already caught lying is
+    /// replaced by the checker, whose outcome then needs a check of its own; otherwise the
+    /// coordinator evaluates it, and whoever differs is quarantined. So the coordinator's own
+    /// re-evaluations stop at the first proven lie of each liar: one that contradicts a hundred
+    /// honest claims costs one evaluation here and a hundred checks elsewhere.
     fn check(&mut self, claims: &[Claim]) -> Result<Vec<Verdict>, EvaluatorError> {
-        let tasks: Vec<Task> = claims
-            .iter()
-            .map(|c| {
-                let id = TaskId(self.next_check);
-                self.next_check += 1;
-                Task {
-                    id,
-                    genome: c.task.genome.clone(),
-                    dims: c.task.dims,
-                }
-            })
-            .collect();
-        let done = self.queue.submit_excluding(
-            tasks
+        let n = claims.len();
+        let mut standing: Vec<Claim> = claims.to_vec();
+        let mut verdicts: Vec<Option<Verdict>> = vec![None; n];
+        let mut liars: Vec<Vec<Claimant>> = vec![Vec::new(); n];
+        let mut checkers: Vec<Vec<String>> = vec![Vec::new(); n];
+        loop {
+            let pending: Vec<usize> = (0..n).filter(|&i| verdicts[i].is_none()).collect();
+            if pending.is_empty() {
+                break;
+            }
+            let tasks: Vec<Task> = pending
                 .iter()
-                .zip(claims)
-                .map(|(t, c)| (t.clone(), Some(c.claimant)))
-                .collect(),
-        );
-        let checks = self.collect(&tasks, &done, &|_, _| {})?;
-        self.stats.checks += claims.len() as u64;
-        let verdicts: Vec<Verdict> = claims
-            .iter()
-            .zip(&checks)
-            .map(|(claim, check)| {
-                if check.origin != Origin::GaveUp
-                    && outcome_text(&claim.outcome) == outcome_text(&check.outcome)
+                .map(|&i| {
+                    let id = TaskId(self.next_check);
+                    self.next_check += 1;
+                    Task {
+                        id,
+                        genome: standing[i].task.genome.clone(),
+                        dims: standing[i].task.dims,
+                    }
+                })
+                .collect();
+            let done = self.queue.submit_checks(
+                tasks
+                    .iter()
+                    .zip(&pending)
+                    .map(|(t, &i)| (t.clone(), Some(standing[i].claimant.principal.clone())))
+                    .collect(),
+            );
+            let checks = self.collect(&tasks, &done, &|_, _| {})?;
+            self.stats.checks += pending.len() as u64;
+            for (&i, check) in pending.iter().zip(&checks) {
+                let claim = standing[i].clone();
+                if let Origin::Claim(checker) = &check.origin
+                    && self.queue.is_quarantined(checker)
                 {
-                    Verdict::agreed(claim.outcome.clone(), check.worker.clone())
-                } else {
-                    self.settle(claim, check)
+                    continue; // caught lying on another task meanwhile: its word counts for nothing
                 }
-            })
-            .collect();
+                checkers[i].push(check.worker.clone());
+                let agrees = check.origin != Origin::GaveUp
+                    && outcome_text(&claim.outcome) == outcome_text(&check.outcome);
+                if agrees {
+                    verdicts[i] = Some(Verdict {
+                        outcome: claim.outcome,
+                        agreed: liars[i].is_empty(),
+                        checker: checkers[i].join(", then "),
+                        liars: std::mem::take(&mut liars[i]),
+                    });
+                    continue;
+                }
+                self.stats.disagreements += 1;
+                let (truth, caught) = match &check.origin {
+                    Origin::Trusted => (check.outcome.clone(), vec![claim.claimant.clone()]),
+                    Origin::Claim(checker) if self.queue.is_quarantined(&claim.claimant) => {
+                        standing[i] = Claim {
+                            outcome: check.outcome.clone(),
+                            claimant: checker.clone(),
+                            ..claim
+                        };
+                        continue;
+                    }
+                    Origin::Claim(_) | Origin::GaveUp => {
+                        let settled = self.settle(&claim, check);
+                        checkers[i].push("coordinator".into());
+                        settled
+                    }
+                };
+                for liar in &caught {
+                    self.punish(liar, claim.task.id);
+                }
+                liars[i].extend(caught);
+                verdicts[i] = Some(Verdict {
+                    outcome: truth,
+                    agreed: false,
+                    checker: checkers[i].join(", then "),
+                    liars: std::mem::take(&mut liars[i]),
+                });
+            }
+        }
+        let verdicts: Vec<Verdict> = verdicts.into_iter().map(|v| v.expect("settled")).collect();
         info!(
-            checks = claims.len(),
+            checks = n,
             disagreed = verdicts.iter().filter(|v| !v.agreed).count(),
             "claims checked"
         );
         Ok(verdicts)
     }
 
-    fn doubts_every_claim_of(&self, worker: WorkerId) -> bool {
-        self.check_all || self.queue.is_quarantined(worker)
+    fn doubts_every_claim_of(&self, claimant: &Claimant) -> bool {
+        self.check_all || self.queue.is_quarantined(claimant)
     }
 
     fn status(&self) -> Option<String> {

@@ -15,9 +15,10 @@ use tokio::sync::watch;
 use tokio::task::JoinSet;
 use tracing::{debug, info, warn};
 
-use super::queue::{QueueError, TaskQueue};
+use super::queue::{Caller, QueueError, TaskQueue};
 use crate::evaluator::Task;
 use crate::ids::{TaskId, WorkerId};
+use crate::principal::Principal;
 
 /// What one local worker did, for the log.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -81,8 +82,8 @@ impl LocalWorker {
         loop {
             if *stop.borrow() {
                 let held: Vec<TaskId> = active.iter().copied().collect();
-                summary.released += u64::from(self.queue.leave(id, &held).unwrap_or(0));
-                info!(worker = %id, released = summary.released, "local worker stopped");
+                summary.released += u64::from(self.queue.leave(&id, &held).unwrap_or(0));
+                info!(worker = %id.worker, released = summary.released, "local worker stopped");
                 return Ok(summary);
             }
             // Registered before the lease, so work queued between the two still wakes us.
@@ -91,9 +92,9 @@ impl LocalWorker {
             notified.as_mut().enable();
             let free = self.threads.saturating_sub(active.len());
             if free > 0 {
-                let leased = match self.queue.lease(id, free as u32, Instant::now()) {
+                let leased = match self.queue.lease(&id, free as u32, Instant::now()) {
                     Err(QueueError::UnknownWorker(_)) => {
-                        (id, active) = (self.rejoin(id)?, BTreeSet::new());
+                        (id, active) = (self.rejoin(&id)?, BTreeSet::new());
                         continue;
                     }
                     other => other?,
@@ -103,7 +104,7 @@ impl LocalWorker {
                     return Ok(summary);
                 }
                 for task in tasks {
-                    self.start(id, &task, &mut running, &mut active);
+                    self.start(&id, &task, &mut running, &mut active);
                 }
             }
             let room = self.threads > active.len();
@@ -115,20 +116,20 @@ impl LocalWorker {
                         // shutting down, and the lease expires on its own.
                         Err(e) => { warn!(error = %e, "local evaluation lost"); continue; }
                     };
-                    if lease != id || !active.remove(&task) {
+                    if lease != id.worker || !active.remove(&task) {
                         continue; // leased under an earlier registration: the queue has moved on
                     }
                     summary.evaluated += 1;
-                    self.report(id, task, result, wall);
+                    self.report(&id, task, result, wall);
                 }
                 () = &mut notified, if room => {}
                 _ = heartbeat.tick() => {
                     let held: Vec<TaskId> = active.iter().copied().collect();
-                    match self.queue.heartbeat(id, &held, Instant::now()) {
+                    match self.queue.heartbeat(&id, &held, Instant::now()) {
                         Ok((_, true)) => return Ok(summary),
                         Ok((_, false)) => {}
                         Err(QueueError::UnknownWorker(_)) => {
-                            (id, active) = (self.rejoin(id)?, BTreeSet::new());
+                            (id, active) = (self.rejoin(&id)?, BTreeSet::new());
                         }
                         Err(e) => return Err(e),
                     }
@@ -137,7 +138,7 @@ impl LocalWorker {
                     if changed.is_err() {
                         // The job dropped its stop sender: nobody can stop us any more, so stop.
                         let held: Vec<TaskId> = active.iter().copied().collect();
-                        let _ = self.queue.leave(id, &held);
+                        let _ = self.queue.leave(&id, &held);
                         return Ok(summary);
                     }
                 }
@@ -145,10 +146,11 @@ impl LocalWorker {
         }
     }
 
-    fn register(&self) -> Result<WorkerId, QueueError> {
+    fn register(&self) -> Result<Caller, QueueError> {
         self.queue.register(
             &self.name,
             self.threads as u32,
+            Principal::Local,
             true,
             std::time::Instant::now(),
         )
@@ -156,7 +158,7 @@ impl LocalWorker {
 
     /// A report the queue refuses (a batch that moved on) loses nothing: the task was done or
     /// re-leased elsewhere.
-    fn report(&self, id: WorkerId, task: TaskId, result: Result<Outcome, String>, wall: f64) {
+    fn report(&self, id: &Caller, task: TaskId, result: Result<Outcome, String>, wall: f64) {
         match self.queue.report(id, task, result, wall, Instant::now()) {
             Ok(disposition) => debug!(%task, ?disposition, "reported"),
             Err(e) => warn!(%task, error = %e, "local outcome not taken"),
@@ -165,8 +167,8 @@ impl LocalWorker {
 
     /// The reaper dropped this worker (its heartbeats were starved past `worker_timeout`): its
     /// leases went back to the queue, so it registers again with nothing held.
-    fn rejoin(&self, old: WorkerId) -> Result<WorkerId, QueueError> {
-        warn!(worker = %old, name = %self.name, "local worker was dropped as silent: registering again");
+    fn rejoin(&self, old: &Caller) -> Result<Caller, QueueError> {
+        warn!(worker = %old.worker, name = %self.name, "local worker was dropped as silent: registering again");
         self.register()
     }
 
@@ -174,7 +176,7 @@ impl LocalWorker {
     /// this worker's error, and goes to another worker (or fails after `max_attempts`).
     fn start(
         &self,
-        id: WorkerId,
+        id: &Caller,
         task: &Arc<Task>,
         running: &mut JoinSet<Evaluated>,
         active: &mut BTreeSet<TaskId>,
@@ -186,6 +188,7 @@ impl LocalWorker {
         }
         active.insert(task.id);
         let (task, scene, shared) = (task.clone(), self.scene.clone(), self.shared.clone());
+        let id = id.worker;
         running.spawn_blocking(move || {
             let started = Instant::now();
             let outcome = shared.run(|| scene.evaluate(&task.genome, task.dims));

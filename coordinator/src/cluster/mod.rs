@@ -2,6 +2,7 @@
 //! it, and the evaluator the search uses to hand batches to the cluster.
 
 pub mod connections;
+pub mod credentials;
 pub mod evaluator;
 pub mod local;
 pub mod peer_text;

@@ -15,10 +15,10 @@ use tokio_stream::StreamExt;
 use tokio_stream::wrappers::TcpListenerStream;
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::{Identity, Server, ServerTlsConfig};
-use tonic::{Request, Status};
 use tracing::{info, warn};
 
 use super::connections::{ConnectionLimits, IDLE_TIMEOUT};
+use super::credentials::{Authenticator, Credentials};
 use super::queue::TaskQueue;
 use super::service::CoordinatorService;
 
@@ -33,8 +33,11 @@ const CALL_TIMEOUT: Duration = Duration::from_secs(30);
 pub struct ServerOptions {
     /// Address to bind; port 0 picks a free one (see [`ServerHandle::addr`]).
     pub listen: String,
-    /// Shared secret every call (but the health check) must carry as `authorization: Bearer …`.
+    /// Shared secret every call (but the health check) must carry as `authorization: Bearer …`,
+    /// unless it carries one of `credentials`. All its holders are one principal.
     pub token: Option<String>,
+    /// Per-worker credentials, each a principal of its own.
+    pub credentials: Credentials,
     /// PEM certificate chain and private key: serve TLS instead of plain HTTP/2.
     pub tls: Option<(PathBuf, PathBuf)>,
     /// Take every worker's outcomes without a check (`cluster.verify = false`). The coordinator's
@@ -77,46 +80,6 @@ impl ServerHandle {
     }
 }
 
-/// Checks the shared secret. Runs before any handler, so a rejected peer never touches the queue;
-/// the rejection is logged with the peer's address.
-#[derive(Clone, Debug)]
-pub struct TokenCheck {
-    expected: Option<Arc<[u8]>>,
-}
-
-impl TokenCheck {
-    pub fn new(token: Option<&str>) -> Self {
-        Self {
-            expected: token.map(|t| format!("Bearer {t}").into_bytes().into()),
-        }
-    }
-}
-
-impl tonic::service::Interceptor for TokenCheck {
-    fn call(&mut self, request: Request<()>) -> Result<Request<()>, Status> {
-        let Some(expected) = &self.expected else {
-            return Ok(request);
-        };
-        let given = request
-            .metadata()
-            .get(amorph_proto::AUTHORIZATION)
-            .map(|v| v.as_bytes());
-        if given.is_some_and(|g| constant_time_eq(g, expected)) {
-            Ok(request)
-        } else {
-            warn!(peer = ?request.remote_addr(), "call without the right token refused");
-            Err(Status::unauthenticated(
-                "missing or wrong token (pass the coordinator's shared secret with --token or AMORPH_TOKEN)",
-            ))
-        }
-    }
-}
-
-/// Compares without an early exit, so response time does not leak how much of a guess was right.
-fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
-}
-
 /// A PEM file, checked for its markers here: rustls would only say "transport error" later.
 fn read_pem(path: &PathBuf, key: &str, markers: &[&str]) -> Result<Vec<u8>, ServerError> {
     let bytes = std::fs::read(path)
@@ -156,7 +119,15 @@ pub async fn start(
     ))
     .max_decoding_message_size(MAX_MESSAGE_BYTES)
     .max_encoding_message_size(MAX_MESSAGE_BYTES);
-    let service = InterceptedService::new(service, TokenCheck::new(options.token.as_deref()));
+    let limits = Arc::new(ConnectionLimits::new(
+        queue.rules().max_workers_per_credential.saturating_mul(2),
+    ));
+    let hook_limits = limits.clone();
+    let authenticator = Authenticator::new(options.token.as_deref(), options.credentials.clone())
+        .on_authenticated(Arc::new(move |request, principal| {
+            hook_limits.authenticated(request.remote_addr(), principal)
+        }));
+    let service = InterceptedService::new(service, authenticator);
     let (health, health_service) = tonic_health::server::health_reporter();
     health
         .set_service_status(
@@ -197,7 +168,6 @@ pub async fn start(
                 ))
             })?;
     }
-    let limits = Arc::new(ConnectionLimits::default());
     // Honest workers send something every heartbeat interval.
     let idle = IDLE_TIMEOUT.max(queue.rules().heartbeat_interval * 3);
     let (stop, mut stopped) = watch::channel(false);
@@ -233,7 +203,7 @@ pub async fn start(
             queue.reap(std::time::Instant::now());
         }
     });
-    info!(%addr, tls = options.tls.is_some(), token = options.token.is_some(), "coordinator listening");
+    info!(%addr, tls = options.tls.is_some(), token = options.token.is_some(), credentials = options.credentials.len(), "coordinator listening");
     Ok(ServerHandle {
         addr,
         stop,

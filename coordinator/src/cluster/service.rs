@@ -12,11 +12,30 @@ use tonic::{Request, Response, Status};
 use tracing::warn;
 
 use super::peer_text::{self, MAX_ERROR_CHARS, MAX_NAME_CHARS};
-use super::queue::{Disposition, TaskQueue};
+use super::queue::{Caller, Disposition, TaskQueue};
 use super::status;
 use amorph::task::Outcome;
 
 use crate::ids::TaskId;
+use crate::principal::Principal;
+
+/// The principal the authenticator found for this call.
+fn principal<T>(request: &Request<T>) -> Result<Principal, Status> {
+    request
+        .extensions()
+        .get::<Principal>()
+        .cloned()
+        .ok_or_else(|| Status::unauthenticated("the call was not authenticated"))
+}
+
+/// Who makes a call, from its credential and the worker id and session it names.
+fn caller(principal: Principal, worker_id: &str, session: &str) -> Result<Caller, Status> {
+    Ok(Caller {
+        worker: status::worker_id(worker_id)?,
+        principal,
+        session: session.to_owned(),
+    })
+}
 
 /// Longest a lease call is held open waiting for work.
 const MAX_LEASE_WAIT: Duration = Duration::from_secs(5);
@@ -89,6 +108,7 @@ impl EvaluationCoordinator for CoordinatorService {
         request: Request<v1::RegisterRequest>,
     ) -> Result<Response<v1::RegisterResponse>, Status> {
         let peer = request.remote_addr();
+        let principal = principal(&request)?;
         let trusted = self.trust_everyone;
         let r = request.into_inner();
         status::protocol_version(r.protocol_version).inspect_err(|_| {
@@ -104,12 +124,18 @@ impl EvaluationCoordinator for CoordinatorService {
             Some(addr) => format!("{name} @{addr}"),
             None => name,
         };
-        let worker_id = self
+        let registered = self
             .queue
-            .register(&name, r.capacity, trusted, Instant::now())?;
+            .register(&name, r.capacity, principal, trusted, Instant::now())?;
         Ok(Response::new(v1::RegisterResponse {
-            worker_id: worker_id.to_string(),
+            worker_id: registered.worker.to_string(),
             heartbeat_interval_ms: self.queue.rules().heartbeat_interval.as_millis() as u32,
+            session: registered.session,
+            capacity: if trusted {
+                r.capacity
+            } else {
+                r.capacity.min(self.queue.rules().max_capacity)
+            },
         }))
     }
 
@@ -117,8 +143,9 @@ impl EvaluationCoordinator for CoordinatorService {
         &self,
         request: Request<v1::LeaseRequest>,
     ) -> Result<Response<v1::LeaseResponse>, Status> {
+        let principal = principal(&request)?;
         let r = request.into_inner();
-        let worker = status::worker_id(&r.worker_id)?;
+        let worker = caller(principal, &r.worker_id, &r.session)?;
         let wait = Duration::from_millis(u64::from(r.wait_ms)).min(MAX_LEASE_WAIT);
         let deadline = tokio::time::Instant::now() + wait;
         loop {
@@ -126,7 +153,7 @@ impl EvaluationCoordinator for CoordinatorService {
             let notified = self.queue.work_notified();
             tokio::pin!(notified);
             notified.as_mut().enable();
-            let (tasks, run_finished) = self.queue.lease(worker, r.max_tasks, Instant::now())?;
+            let (tasks, run_finished) = self.queue.lease(&worker, r.max_tasks, Instant::now())?;
             if !tasks.is_empty() || run_finished || tokio::time::Instant::now() >= deadline {
                 return Ok(Response::new(v1::LeaseResponse {
                     tasks: tasks.iter().map(|t| self.wire_task(t)).collect(),
@@ -143,8 +170,10 @@ impl EvaluationCoordinator for CoordinatorService {
         &self,
         request: Request<v1::ReportRequest>,
     ) -> Result<Response<v1::ReportResponse>, Status> {
+        let principal = principal(&request)?;
         let r = request.into_inner();
-        let worker = status::worker_id(&r.worker_id)?;
+        let caller = caller(principal, &r.worker_id, &r.session)?;
+        let worker = caller.worker;
         status::list_length("results", r.results.len())?;
         let mut dispositions = Vec::with_capacity(r.results.len());
         // Every valid result is recorded even if another in the same call is refused; the first
@@ -180,7 +209,7 @@ impl EvaluationCoordinator for CoordinatorService {
             }
             match self
                 .queue
-                .report(worker, task, outcome, wall, Instant::now())
+                .report(&caller, task, outcome, wall, Instant::now())
             {
                 Ok(d) => dispositions.push(match (d, malformed) {
                     (Disposition::Accepted, _) => v1::ReportDisposition::Accepted,
@@ -205,13 +234,14 @@ impl EvaluationCoordinator for CoordinatorService {
         &self,
         request: Request<v1::HeartbeatRequest>,
     ) -> Result<Response<v1::HeartbeatResponse>, Status> {
+        let principal = principal(&request)?;
         let r = request.into_inner();
         status::protocol_version(r.protocol_version)?;
-        let worker = status::worker_id(&r.worker_id)?;
+        let worker = caller(principal, &r.worker_id, &r.session)?;
         status::list_length("active_task_ids", r.active_task_ids.len())?;
         let (revoked, run_finished) =
             self.queue
-                .heartbeat(worker, &task_ids(&r.active_task_ids), Instant::now())?;
+                .heartbeat(&worker, &task_ids(&r.active_task_ids), Instant::now())?;
         Ok(Response::new(v1::HeartbeatResponse {
             revoked_task_ids: revoked.into_iter().map(|t| t.0).collect(),
             run_finished,
@@ -222,10 +252,11 @@ impl EvaluationCoordinator for CoordinatorService {
         &self,
         request: Request<v1::ReleaseRequest>,
     ) -> Result<Response<v1::ReleaseResponse>, Status> {
+        let principal = principal(&request)?;
         let r = request.into_inner();
-        let worker = status::worker_id(&r.worker_id)?;
+        let worker = caller(principal, &r.worker_id, &r.session)?;
         status::list_length("task_ids", r.task_ids.len())?;
-        let released = self.queue.release(worker, &task_ids(&r.task_ids))?;
+        let released = self.queue.release(&worker, &task_ids(&r.task_ids))?;
         Ok(Response::new(v1::ReleaseResponse { released }))
     }
 

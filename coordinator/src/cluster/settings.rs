@@ -8,6 +8,8 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use super::QueueRules;
+use super::queue::MAX_WORKERS;
+use super::status::MAX_CAPACITY;
 
 /// Longest heartbeat interval, lease or worker timeout: a day. `Instant + Duration` panics on
 /// overflow, so a config's `u64::MAX` ms must stop here.
@@ -32,8 +34,12 @@ pub struct ClusterSection {
     /// for any count; with `local_workers` unset, the cores are divided by it.
     pub threads_per_evaluation: usize,
     /// File holding the shared secret workers must present (surrounding whitespace ignored). The
-    /// AMORPH_TOKEN environment variable, if set, takes precedence.
+    /// AMORPH_TOKEN environment variable, if set, takes precedence. All its holders are one
+    /// principal.
     pub token_file: Option<PathBuf>,
+    /// Per-worker credentials (`coordinator credentials add NAME`): each is a principal of its
+    /// own, so workers under different credentials check each other.
+    pub credentials_file: Option<PathBuf>,
     /// PEM certificate chain and private key: serve TLS (workers connect with https://).
     pub tls_cert: Option<PathBuf>,
     pub tls_key: Option<PathBuf>,
@@ -45,8 +51,13 @@ pub struct ClusterSection {
     pub worker_timeout_ms: u64,
     /// Different workers whose errors mark a task failed instead of retried.
     pub max_attempts: u32,
-    /// Longest a lease lives from its grant, heartbeats or not, ms.
+    /// Longest a lease lives from its grant, heartbeats or not, ms; once evaluations are
+    /// measured, a lease lives eight median evaluation times, within `[lease_ms, max_lease_ms]`.
     pub max_lease_ms: u64,
+    /// Most tasks one outside worker holds at once, whatever capacity it declares.
+    pub max_capacity: u32,
+    /// Most outside workers registered at once under one credential (the shared token is one).
+    pub max_workers_per_credential: usize,
     /// Which outside workers' outcomes are evaluated a second time elsewhere before they count
     /// (the coordinator's own local workers are trusted): see [`Verify`].
     pub verify: Verify,
@@ -105,13 +116,16 @@ impl Default for ClusterSection {
             local_worker_threads: 1,
             threads_per_evaluation: 1,
             token_file: None,
+            credentials_file: None,
             tls_cert: None,
             tls_key: None,
             heartbeat_ms: 1000,
             lease_ms: 10_000,
             worker_timeout_ms: 5000,
             max_attempts: 3,
-            max_lease_ms: 3_600_000,
+            max_lease_ms: 600_000,
+            max_capacity: 256,
+            max_workers_per_credential: 256,
             verify: Verify::Decisive,
         }
     }
@@ -242,6 +256,18 @@ impl TryFrom<&ClusterSection> for ClusterSettings {
                 worker_timeout,
                 max_attempts: c.max_attempts,
                 max_lease,
+                max_capacity: count(
+                    "max_capacity",
+                    c.max_capacity as usize,
+                    1,
+                    MAX_CAPACITY as usize,
+                )? as u32,
+                max_workers_per_credential: count(
+                    "max_workers_per_credential",
+                    c.max_workers_per_credential,
+                    1,
+                    MAX_WORKERS,
+                )?,
             },
             verify: c.verify,
         })
@@ -290,7 +316,11 @@ mod tests {
     #[test]
     fn regression_sizes_and_durations_out_of_bounds_name_their_key() {
         type Edit = fn(&mut ClusterSection);
-        let cases: [(&str, Edit); 9] = [
+        let cases: [(&str, Edit); 11] = [
+            ("cluster.max_capacity = 0", |c| c.max_capacity = 0),
+            ("cluster.max_workers_per_credential = 5000", |c| {
+                c.max_workers_per_credential = 5000
+            }),
             ("cluster.local_workers = 100000", |c| {
                 c.local_workers = Some(100_000)
             }),

@@ -23,7 +23,10 @@ impl From<QueueError> for Status {
             }
             QueueError::NotLeasedTo { .. } => Status::failed_precondition(e.to_string()),
             QueueError::Quarantined(_) => Status::permission_denied(e.to_string()),
-            QueueError::TooManyWorkers => Status::resource_exhausted(e.to_string()),
+            QueueError::TooManyWorkers | QueueError::TooManyForCredential { .. } => {
+                Status::resource_exhausted(e.to_string())
+            }
+            QueueError::BadSession(_) => Status::unauthenticated(e.to_string()),
         }
     }
 }

@@ -224,7 +224,7 @@ pub(super) fn evaluate_parts(
                 task: parts[*p].tasks[*slot].id,
                 outcome: done.outcome,
                 claimant: match done.origin {
-                    Origin::Claim(w) => Some(w),
+                    Origin::Claim(claimant) => Some(claimant),
                     Origin::Trusted | Origin::GaveUp => None,
                 },
             });

@@ -40,9 +40,13 @@ struct Connect {
     /// count; more pays when evaluations are fewer than cores (large robots, small batches).
     #[arg(long, default_value_t = 1)]
     threads_per_evaluation: usize,
-    /// Shared secret the coordinator requires.
+    /// Shared secret the coordinator requires, or this worker's own credential.
     #[arg(long, env = "AMORPH_TOKEN", hide_env_values = true)]
     token: Option<String>,
+    /// File holding the token (a credential from `coordinator credentials add NAME`, or the
+    /// shared secret); surrounding whitespace is ignored.
+    #[arg(long, env = "AMORPH_TOKEN_FILE", conflicts_with = "token")]
+    token_file: Option<PathBuf>,
     /// Name shown in the coordinator's logs and run store (default: host:pid).
     #[arg(long)]
     name: Option<String>,
@@ -270,7 +274,16 @@ fn serve(c: Connect) -> anyhow::Result<()> {
     if let Some(name) = c.name {
         opts.name = name;
     }
-    opts.token = c.token.filter(|t| !t.is_empty());
+    opts.token = match &c.token_file {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| anyhow::anyhow!("--token-file {}: {e}", path.display()))?;
+            let token = text.trim();
+            anyhow::ensure!(!token.is_empty(), "--token-file {} is empty", path.display());
+            Some(token.to_owned())
+        }
+        None => c.token.filter(|t| !t.is_empty()),
+    };
     opts.ca_cert = c.ca;
     opts.tls_domain = c.tls_domain;
     opts.exit_when_finished = !c.stay;

@@ -62,6 +62,8 @@ struct Worker {
     /// Tasks on the pool, with the worker id they were leased under.
     active: HashMap<TaskId, String>,
     unreported: Vec<Finished>,
+    /// The session secret of each worker id this process registered as.
+    sessions: HashMap<String, String>,
     scenes: HashMap<String, Arc<Scene>>,
     stopping: bool,
     summary: WorkerSummary,
@@ -135,6 +137,7 @@ pub async fn run_worker(
         done,
         active: HashMap::new(),
         unreported: Vec::new(),
+        sessions: HashMap::new(),
         scenes: HashMap::new(),
         stopping: false,
         summary: WorkerSummary::default(),

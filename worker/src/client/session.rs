@@ -56,6 +56,13 @@ impl Worker {
             })?
             .into_inner();
         let id = registered.worker_id;
+        let session = registered.session;
+        // Earlier registrations matter only while a result leased under them waits.
+        let (active, unreported) = (&self.active, &self.unreported);
+        self.sessions.retain(|old, _| {
+            active.values().any(|l| l == old) || unreported.iter().any(|f| &f.lease_id == old)
+        });
+        self.sessions.insert(id.clone(), session.clone());
         self.summary.sessions += 1;
         info!(worker = %id, url = %self.opts.url, threads = self.pool.threads(), "registered");
         let interval = Duration::from_millis(u64::from(registered.heartbeat_interval_ms.max(50)));
@@ -93,6 +100,7 @@ impl Worker {
                 let mut client = client.clone();
                 let request = v1::LeaseRequest {
                     worker_id: id.clone(),
+                    session: session.clone(),
                     max_tasks: want,
                     wait_ms: 1000,
                 };
@@ -140,6 +148,7 @@ impl Worker {
                     let reply = client
                         .heartbeat(v1::HeartbeatRequest {
                             worker_id: id.clone(),
+                            session: session.clone(),
                             active_task_ids: wire_ids(&self.leased_under(&id)),
                             protocol_version: PROTOCOL_VERSION,
                         })
@@ -157,6 +166,7 @@ impl Worker {
                     let released = client
                         .release(v1::ReleaseRequest {
                             worker_id: id.clone(),
+                            session: session.clone(),
                             task_ids: wire_ids(&ours),
                         })
                         .await
@@ -321,6 +331,7 @@ impl Worker {
                 .collect();
             match client
                 .report(v1::ReportRequest {
+                    session: self.sessions.get(&lease_id).cloned().unwrap_or_default(),
                     worker_id: lease_id.clone(),
                     results,
                 })

@@ -1,38 +1,48 @@
 //! The task queue with leases: the coordinator's whole bookkeeping of who evaluates what.
 //!
 //! A synchronous state machine behind one mutex, with the time passed in, so every rule (lease
-//! expiry, silent workers, duplicate and late reports, retries) is tested without a network. The
-//! gRPC service calls it; the search submits one batch at a time and collects its completions
-//! from a channel as they arrive (so the run store records each one at once).
+//! expiry, silent workers, duplicate and late reports, retries, shares) is tested without a
+//! network. The gRPC service calls it; the search submits one batch at a time and collects its
+//! completions from a channel as they arrive (so the run store records each one at once).
 //!
 //! Each task of the batch is in one phase (`task.rs`): **queued → leased → done | failed**, and
 //! leased → queued when a lease lapses, its worker goes silent or hands it back, or the holder
 //! reports an error. Done and failed are final: such a task is never leased again and sends
 //! exactly one completion. Rules:
-//! - A lease lasts `lease` from when it is granted or last named in a heartbeat by its holder.
+//! - Every call names a worker and carries the session secret its registration returned, bound
+//!   to the principal (credential) that registered it (`crate::principal`); a worker id alone
+//!   proves nothing.
+//! - A lease lasts `lease` from when it is granted or last named in a heartbeat by its holder,
+//!   and never longer than its lifetime; while other principals wait, a principal holds at most
+//!   its fair share (`share.rs`).
 //! - The first outcome reported for a task wins, even from a worker whose lease has lapsed (the
 //!   evaluation is a pure function, so a late outcome is as good as any); later ones are
 //!   duplicates and change nothing.
 //! - A worker may report only tasks it was leased at some point, and answers each at most once.
-//! - A worker's error (or a malformed outcome) is noted; the task is not leased to that worker
-//!   again, and is marked failed only once `max_attempts` *different* workers have given errors,
-//!   so one worker cannot fail a task however often it reports.
-//! - A check task (`TaskId::is_check`, verification of an outside worker's outcome) is never
-//!   leased to the worker whose outcome it checks; one no live worker may take is handed to the
-//!   coordinator itself (`orphan_checks`), so a check never waits for a worker that cannot come.
-//! - A quarantined worker (caught disagreeing with a check) loses its leases and every later call
-//!   is refused; trusted workers (the coordinator's own) are never checked.
+//! - A worker's error (or a malformed outcome) is noted; the task is not leased to that voice
+//!   again (an outside worker's voice is its principal's), and is marked failed only once
+//!   `max_attempts` *different* voices have given errors, so one credential cannot fail a task
+//!   however many workers it registers.
+//! - A check task (`TaskId::is_check`, verification of an outside worker's outcome) is leased
+//!   only to a principal that may check the claimant's; one no live worker may take is handed to
+//!   the coordinator itself (`orphans`), so a check never waits for a worker that cannot come.
+//! - A quarantined principal (a credential caught in a lie), or under the shared token the one
+//!   registration caught, loses its leases and every later call is refused; trusted workers (the
+//!   coordinator's own) are never checked.
 
 mod rules;
+mod share;
 mod task;
 mod worker_calls;
 
+#[cfg(test)]
+mod principals;
 #[cfg(test)]
 mod properties;
 #[cfg(test)]
 mod tests;
 
-use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet, VecDeque};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
@@ -40,15 +50,25 @@ use std::time::Instant;
 use amorph::task::Outcome;
 use tracing::{info, warn};
 
-use crate::evaluator::Origin;
-use crate::evaluator::{Completion, Task};
+use crate::evaluator::{Claimant, Completion, Origin, Task};
 use crate::ids::{TaskId, WorkerId};
+use crate::principal::{Principal, Sessions};
 pub use rules::{Disposition, MAX_WORKERS, NotedError, QueueError, QueueRules, QueueStats};
-use task::{Phase, TaskState};
+use task::{Phase, TaskState, Voice};
+
+/// Who makes a call: a worker id, the principal the call's credential proves, and the session
+/// secret the worker's registration returned.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Caller {
+    pub worker: WorkerId,
+    pub principal: Principal,
+    pub session: String,
+}
 
 #[derive(Debug)]
 struct WorkerState {
     name: String,
+    principal: Principal,
     capacity: u32,
     last_seen: Instant,
     leased: HashSet<TaskId>,
@@ -56,21 +76,21 @@ struct WorkerState {
     trusted: bool,
     /// When it last asked for work or delivered an outcome (a worker between the two is at work).
     last_asked: Instant,
+    /// Slots its last lease call with room left unfilled (it waits for work while this is
+    /// above 0 and that call is recent).
+    wants: u32,
     /// A lease or heartbeat has answered it that the run finished.
     told_finished: bool,
 }
 
-/// A registered worker that has just been heard from: `now` is its last sign of life.
-fn seen(
-    workers: &mut HashMap<WorkerId, WorkerState>,
-    worker: WorkerId,
-    now: Instant,
-) -> Result<&mut WorkerState, QueueError> {
-    let w = workers
-        .get_mut(&worker)
-        .ok_or(QueueError::UnknownWorker(worker))?;
-    w.last_seen = now;
-    Ok(w)
+impl WorkerState {
+    fn voice(&self, id: WorkerId) -> Voice {
+        if self.trusted {
+            Voice::Worker(id)
+        } else {
+            Voice::Principal(self.principal.clone())
+        }
+    }
 }
 
 #[derive(Debug)]
@@ -88,6 +108,10 @@ struct State {
     highest_task: [Option<TaskId>; 2],
     /// Workers caught disagreeing with a check: every later call of theirs is refused.
     quarantined: HashSet<WorkerId>,
+    /// Credentials caught the same way: every call and registration under them is refused.
+    quarantined_principals: HashSet<Principal>,
+    /// Grant-to-report times of the last accepted reports, for the lease lifetime.
+    lease_times: VecDeque<std::time::Duration>,
     completions: Option<Sender<Completion>>,
     noted_errors: Vec<NotedError>,
     run_finished: bool,
@@ -100,6 +124,7 @@ pub struct TaskQueue {
     rules: QueueRules,
     /// Distinguishes this coordinator process's worker ids from a previous one's (after a resume).
     tag: u32,
+    sessions: Sessions,
     state: Mutex<State>,
     /// Wakes leases waiting for work (and for the end of the run).
     work: tokio::sync::Notify,
@@ -113,6 +138,7 @@ impl TaskQueue {
         Self {
             rules,
             tag: ((nanos ^ (u128::from(std::process::id()) << 20)) & 0xff_ffff) as u32,
+            sessions: Sessions::new(),
             state: Mutex::new(State {
                 workers: HashMap::new(),
                 next_worker: 0,
@@ -121,6 +147,8 @@ impl TaskQueue {
                 earlier: HashMap::new(),
                 highest_task: [None, None],
                 quarantined: HashSet::new(),
+                quarantined_principals: HashSet::new(),
+                lease_times: VecDeque::with_capacity(share::SAMPLES),
                 completions: None,
                 noted_errors: Vec::new(),
                 run_finished: false,
@@ -144,11 +172,6 @@ impl TaskQueue {
     /// ended). Create the future *before* checking the queue so no wake-up is missed.
     pub fn work_notified(&self) -> tokio::sync::futures::Notified<'_> {
         self.work.notified()
-    }
-
-    /// Whether this process handed out `worker` (it may since have been dropped as silent).
-    fn issued(&self, s: &State, worker: WorkerId) -> bool {
-        worker.tag == self.tag && worker.serial >= 1 && worker.serial <= s.next_worker
     }
 
     /// Returns expired leases and the leases of silent workers to the queue; drops silent workers.
@@ -177,7 +200,7 @@ impl TaskQueue {
             }
         }
         for &id in &requeue {
-            s.requeue_or_fail(id, self.rules.max_attempts);
+            s.requeue_or_fail(id, self.rules.max_attempts, true);
         }
         for id in &silent {
             s.workers.remove(id);
@@ -198,12 +221,12 @@ impl TaskQueue {
     /// Replaces the current batch with `tasks` (ids must increase) and returns the channel its
     /// completions arrive on, one per task, in the order they finish.
     pub fn submit(&self, tasks: Vec<Task>) -> Receiver<Completion> {
-        self.submit_excluding(tasks.into_iter().map(|t| (t, None)).collect())
+        self.submit_checks(tasks.into_iter().map(|t| (t, None)).collect())
     }
 
-    /// [`TaskQueue::submit`] for tasks each of which may be kept from one worker: a check task is
-    /// never leased to the worker whose outcome it checks.
-    pub fn submit_excluding(&self, tasks: Vec<(Task, Option<WorkerId>)>) -> Receiver<Completion> {
+    /// [`TaskQueue::submit`] for tasks each of which may check a claim of one principal: such a
+    /// task is leased only to a principal that may check that one.
+    pub fn submit_checks(&self, tasks: Vec<(Task, Option<Principal>)>) -> Receiver<Completion> {
         let (tx, rx) = channel();
         let mut guard = self.lock();
         let s = &mut *guard;
@@ -214,7 +237,7 @@ impl TaskQueue {
             s.earlier.insert(id, t.leased_to.into_boxed_slice());
         }
         s.queued.clear();
-        for (slot, (task, excluded)) in tasks.into_iter().enumerate() {
+        for (slot, (task, checks)) in tasks.into_iter().enumerate() {
             let id = task.id;
             let highest = &mut s.highest_task[usize::from(id.is_check())];
             assert!(
@@ -223,7 +246,7 @@ impl TaskQueue {
             );
             *highest = Some(id);
             s.queued.insert(id);
-            s.tasks.insert(id, TaskState::new(task, slot, excluded));
+            s.tasks.insert(id, TaskState::new(task, slot, checks));
         }
         s.completions = Some(tx);
         drop(guard);
@@ -231,13 +254,15 @@ impl TaskQueue {
         rx
     }
 
-    /// Queued check tasks that came back from a lease (its holder went silent, gave it back or
-    /// held it past its lease), or that no worker at work may take: each is kept from its
-    /// claimant, and the others failed it, or there are none, or they neither hold a lease nor
-    /// have asked for work within a lease's length (a worker may be alive and never ask). So no
-    /// worker can hold a check back for longer than one lease. The coordinator evaluates these
-    /// itself and hands the outcome to [`TaskQueue::finish_here`].
-    pub fn orphan_checks(&self, now: Instant) -> Vec<Arc<Task>> {
+    /// Queued tasks the coordinator evaluates itself: check tasks that came back from a lease
+    /// (their holder went silent, gave them back or held them past their lease), and any task
+    /// some voice gave an error for, or any check, that no worker at work may take (its voice
+    /// failed it, its principal may not check the claim, or there is none): they neither hold a
+    /// lease nor have asked for work within a lease's length (a worker may be alive and never
+    /// ask). So no worker can hold a check back for longer than one lease, and a task one
+    /// principal refuses to evaluate waits for no one. The outcomes go to
+    /// [`TaskQueue::finish_here`].
+    pub fn orphans(&self, now: Instant) -> Vec<Arc<Task>> {
         let s = self.lock();
         let working = |w: &WorkerState| {
             w.capacity > 0
@@ -247,13 +272,18 @@ impl TaskQueue {
         s.queued
             .iter()
             .map(|id| &s.tasks[id])
-            .filter(|t| t.task.id.is_check())
+            // A task a trusted worker failed would fail here too (its memory budget, say).
             .filter(|t| {
-                !t.leased_to.is_empty()
+                t.task.id.is_check()
+                    || (!t.errors.is_empty()
+                        && t.errors.iter().all(|(v, _)| matches!(v, Voice::Principal(_))))
+            })
+            .filter(|t| {
+                (t.task.id.is_check() && !t.leased_to.is_empty())
                     || !s
                         .workers
                         .iter()
-                        .any(|(&w, ws)| working(ws) && t.may_take(w))
+                        .any(|(&id, w)| working(w) && t.may_take(id, w))
             })
             .map(|t| t.task.clone())
             .collect()
@@ -274,31 +304,49 @@ impl TaskQueue {
         }
     }
 
-    /// Refuses every later call of `worker` and returns its leases to the queue: it was caught
-    /// reporting an outcome a check contradicted.
-    pub fn quarantine(&self, worker: WorkerId) {
+    /// Refuses every later call of the claimant and returns its leases to the queue: it was
+    /// caught reporting an outcome a check contradicted. Under a credential the whole credential
+    /// is quarantined (it answers for its workers); under the shared token, which honest workers
+    /// hold too, the one registration.
+    pub fn quarantine(&self, liar: &Claimant) {
         let mut guard = self.lock();
         let s = &mut *guard;
-        if !s.quarantined.insert(worker) {
-            return;
+        let caught: Vec<WorkerId> = if liar.principal.answers_for_its_workers() {
+            if !s.quarantined_principals.insert(liar.principal.clone()) {
+                return;
+            }
+            s.workers
+                .iter()
+                .filter(|(_, w)| w.principal == liar.principal)
+                .map(|(&id, _)| id)
+                .collect()
+        } else {
+            if liar.principal.is_local() || !s.quarantined.insert(liar.worker) {
+                return;
+            }
+            vec![liar.worker]
+        };
+        for worker in caught {
+            let held: Vec<TaskId> = s
+                .workers
+                .get(&worker)
+                .map(|w| w.leased.iter().copied().collect())
+                .unwrap_or_default();
+            for id in held {
+                s.requeue_or_fail(id, self.rules.max_attempts, true);
+            }
+            s.workers.remove(&worker);
         }
-        let held: Vec<TaskId> = s
-            .workers
-            .get(&worker)
-            .map(|w| w.leased.iter().copied().collect())
-            .unwrap_or_default();
-        for id in held {
-            s.requeue_or_fail(id, self.rules.max_attempts);
-        }
-        s.workers.remove(&worker);
-        warn!(%worker, "worker quarantined: its leases go back to the queue and its calls are refused");
+        warn!(worker = %liar.worker, principal = %liar.principal, "quarantined: its leases go back to the queue and its calls are refused");
         drop(guard);
         self.work.notify_waiters();
     }
 
-    /// Whether `worker` is in this process's quarantine.
-    pub fn is_quarantined(&self, worker: WorkerId) -> bool {
-        self.lock().quarantined.contains(&worker)
+    /// Whether the claimant, or its credential, is in this process's quarantine.
+    pub fn is_quarantined(&self, claimant: &Claimant) -> bool {
+        let s = self.lock();
+        s.quarantined.contains(&claimant.worker)
+            || s.quarantined_principals.contains(&claimant.principal)
     }
 
     /// Ends the run: leases answer `run_finished`, waiting leases return at once.

@@ -1,13 +1,14 @@
 //! Property tests: random interleavings of register / lease / heartbeat / report / release /
-//! expiry / silence / quarantine from several workers, honest or not, with the queue's invariants checked
-//! after every step, and at the end every task finished exactly once with the first accepted
-//! outcome.
+//! expiry / silence / quarantine from several workers under several principals (some with more
+//! than one registration), honest or not, with forged ids and stolen sessions, with the queue's
+//! invariants checked after every step, and at the end every task finished exactly once with the
+//! first accepted outcome.
 
 use std::collections::HashMap;
 
 use proptest::prelude::*;
 
-use super::tests::{rules, tasks};
+use super::tests::{claimant, rules, tasks};
 use super::*;
 use amorph::outcome::Failure;
 use std::time::Duration;
@@ -18,6 +19,8 @@ const TASKS: u64 = 6;
 enum Op {
     Register {
         capacity: u32,
+        /// 0 to 2: credentials p0 to p2; 3: the shared token.
+        principal: u8,
     },
     Lease {
         worker: usize,
@@ -49,11 +52,23 @@ enum Op {
     Quarantine {
         worker: usize,
     },
+    /// A real worker id with another worker's session secret, or under another credential.
+    Stolen {
+        worker: usize,
+        thief: usize,
+    },
+}
+
+fn principal(i: u8) -> Principal {
+    match i {
+        3 => Principal::Shared,
+        i => Principal::Credential(format!("p{i}").into()),
+    }
 }
 
 fn op() -> impl Strategy<Value = Op> {
     prop_oneof![
-        1 => (1u32..4).prop_map(|capacity| Op::Register { capacity }),
+        1 => (1u32..4, 0u8..4).prop_map(|(capacity, principal)| Op::Register { capacity, principal }),
         4 => (0usize..8, 0u32..5).prop_map(|(worker, max)| Op::Lease { worker, max }),
         2 => (0usize..8, any::<u8>()).prop_map(|(worker, tasks)| Op::Heartbeat { worker, tasks }),
         5 => (0usize..8, 0u64..TASKS + 2, prop::bool::weighted(0.4))
@@ -62,6 +77,7 @@ fn op() -> impl Strategy<Value = Op> {
         2 => (0u64..12_000).prop_map(|ms| Op::Advance { ms }),
         1 => (0u64..12, 0u64..TASKS + 2).prop_map(|(serial, task)| Op::Forged { serial, task }),
         1 => (0usize..8).prop_map(|worker| Op::Quarantine { worker }),
+        1 => (0usize..8, 0usize..8).prop_map(|(worker, thief)| Op::Stolen { worker, thief }),
     ]
 }
 
@@ -104,7 +120,7 @@ impl Seen {
     fn report(
         &mut self,
         q: &TaskQueue,
-        worker: WorkerId,
+        worker: &Caller,
         task: TaskId,
         error: bool,
         now: Instant,
@@ -144,17 +160,22 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
     });
     let mut now = Instant::now();
     let rx = q.submit(tasks(1..=TASKS));
-    let mut workers: Vec<WorkerId> = Vec::new();
+    let mut workers: Vec<Caller> = Vec::new();
     let mut seen = Seen::default();
-    let pick = |workers: &[WorkerId], i: usize| workers.get(i % workers.len().max(1)).copied();
+    let pick = |workers: &[Caller], i: usize| workers.get(i % workers.len().max(1)).cloned();
     for op in ops {
         match op {
-            Op::Register { capacity } => {
-                workers.push(q.register("w", capacity, false, now).unwrap())
+            Op::Register {
+                capacity,
+                principal: p,
+            } => {
+                if let Ok(w) = q.register("w", capacity, principal(p), false, now) {
+                    workers.push(w);
+                }
             }
             Op::Lease { worker, max } => {
                 if let Some(w) = pick(&workers, worker)
-                    && let Ok((leased, _)) = q.lease(w, max, now)
+                    && let Ok((leased, _)) = q.lease(&w, max, now)
                 {
                     for t in leased {
                         let i = (t.id.0 - 1) as usize;
@@ -168,7 +189,7 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
             }
             Op::Heartbeat { worker, tasks } => {
                 if let Some(w) = pick(&workers, worker) {
-                    let _ = q.heartbeat(w, &named(tasks), now);
+                    let _ = q.heartbeat(&w, &named(tasks), now);
                 }
             }
             Op::Report {
@@ -177,12 +198,12 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                 error,
             } => {
                 if let Some(w) = pick(&workers, worker) {
-                    seen.report(&q, w, TaskId(task), error, now)?;
+                    seen.report(&q, &w, TaskId(task), error, now)?;
                 }
             }
             Op::Release { worker, tasks } => {
                 if let Some(w) = pick(&workers, worker) {
-                    let _ = q.release(w, &named(tasks));
+                    let _ = q.release(&w, &named(tasks));
                 }
             }
             Op::Advance { ms } => {
@@ -195,13 +216,17 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                 } else {
                     q.tag ^ 0x5a5a
                 };
-                let forged = WorkerId {
-                    serial: serial + 100,
-                    tag,
+                let forged = Caller {
+                    worker: WorkerId {
+                        serial: serial + 100,
+                        tag,
+                    },
+                    principal: principal((serial % 4) as u8),
+                    session: "00".repeat(32),
                 };
                 prop_assert!(
                     q.report(
-                        forged,
+                        &forged,
                         TaskId(task),
                         Ok(Outcome::failed(Failure::Empty)),
                         0.0,
@@ -209,17 +234,44 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                     )
                     .is_err()
                 );
-                prop_assert!(q.lease(forged, 4, now).is_err());
+                prop_assert!(q.lease(&forged, 4, now).is_err());
             }
             Op::Quarantine { worker } => {
                 if let Some(w) = pick(&workers, worker) {
-                    q.quarantine(w);
-                    prop_assert_eq!(q.lease(w, 4, now).err(), Some(QueueError::Quarantined(w)));
+                    q.quarantine(&claimant(&w));
+                    let refused = Some(QueueError::Quarantined(w.worker));
+                    prop_assert_eq!(q.lease(&w, 4, now).err(), refused.clone());
                     prop_assert_eq!(
-                        q.report(w, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0, now)
+                        q.report(&w, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0, now)
                             .err(),
-                        Some(QueueError::Quarantined(w))
+                        refused
                     );
+                }
+            }
+            Op::Stolen { worker, thief } => {
+                if let (Some(w), Some(t)) = (pick(&workers, worker), pick(&workers, thief))
+                    && w.worker != t.worker
+                {
+                    for stolen in [
+                        Caller {
+                            session: t.session.clone(),
+                            ..w.clone()
+                        },
+                        Caller {
+                            principal: t.principal.clone(),
+                            ..w.clone()
+                        },
+                    ] {
+                        if stolen == w {
+                            continue; // same principal: the second case is the worker itself
+                        }
+                        let refused = Some(QueueError::BadSession(w.worker));
+                        prop_assert_eq!(q.lease(&stolen, 4, now).err(), refused.clone());
+                        prop_assert_eq!(q.heartbeat(&stolen, &[], now).err(), refused.clone());
+                        prop_assert_eq!(q.release(&stolen, &named(0xff)).err(), refused.clone());
+                        let report = q.report(&stolen, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0, now);
+                        prop_assert_eq!(report.err(), refused);
+                    }
                 }
             }
         }
@@ -230,11 +282,11 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
     // Honest workers arrive after everyone else has gone: nothing may be stranded.
     now += Duration::from_secs(3600);
     q.reap(now);
-    let honest: Vec<WorkerId> = (0..2)
-        .map(|_| q.register("honest", 4, false, now).unwrap())
+    let honest: Vec<Caller> = (0..2)
+        .map(|_| super::tests::outside(&q, "honest", 4, now).unwrap())
         .collect();
     for _ in 0..TASKS {
-        for &w in &honest {
+        for w in &honest {
             let (leased, _) = q.lease(w, 4, now).expect("registered");
             for t in leased {
                 seen.report(&q, w, t.id, false, now)?;

@@ -17,9 +17,15 @@ pub struct QueueRules {
     /// Different workers whose errors mark a task failed rather than retried.
     pub max_attempts: u32,
     /// Longest a lease lives from its grant, heartbeats or not, so a worker that names its
-    /// leases in every heartbeat cannot keep them for ever. A lease that runs out goes to
-    /// another worker; the first holder's outcome still counts if it comes first.
+    /// leases in every heartbeat cannot keep them for ever. Once evaluations have been measured
+    /// the lifetime follows them (`share.rs`), within `[lease, max_lease]`. A lease that runs out
+    /// goes to another worker; the first holder's outcome still counts if it comes first.
     pub max_lease: Duration,
+    /// Most tasks one outside worker may hold, whatever capacity it declares.
+    pub max_capacity: u32,
+    /// Most outside workers registered at once under one credential (the shared token counts as
+    /// one).
+    pub max_workers_per_credential: usize,
 }
 
 impl Default for QueueRules {
@@ -29,7 +35,9 @@ impl Default for QueueRules {
             heartbeat_interval: Duration::from_secs(1),
             worker_timeout: Duration::from_secs(5),
             max_attempts: 3,
-            max_lease: Duration::from_secs(3600),
+            max_lease: Duration::from_secs(600),
+            max_capacity: 256,
+            max_workers_per_credential: 256,
         }
     }
 }
@@ -53,10 +61,18 @@ pub enum QueueError {
     UnknownTask(TaskId),
     #[error("{task} was never leased to worker {worker}")]
     NotLeasedTo { task: TaskId, worker: WorkerId },
-    #[error("worker {0} is quarantined: an outcome it reported disagreed with a check")]
+    #[error(
+        "worker {0} is quarantined: an outcome it or its credential reported disagreed with a check"
+    )]
     Quarantined(WorkerId),
     #[error("{MAX_WORKERS} outside workers are registered: try again once some have left")]
     TooManyWorkers,
+    #[error(
+        "{principal} has {limit} workers registered, none idle (cluster.max_workers_per_credential)"
+    )]
+    TooManyForCredential { principal: String, limit: usize },
+    #[error("the session secret does not match worker {0} and this credential")]
+    BadSession(WorkerId),
 }
 
 /// Counts for progress lines and benchmarks.
@@ -70,6 +86,8 @@ pub struct QueueStats {
     pub duplicates: u64,
     pub worker_errors: u64,
     pub expired_leases: u64,
+    /// Idle registrations dropped to make room for a new one of the same credential.
+    pub evicted: u64,
 }
 
 /// A worker's error for a task, for the run store: (task, worker, message).

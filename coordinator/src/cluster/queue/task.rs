@@ -10,15 +10,35 @@ use amorph::outcome::Failure;
 use amorph::task::Outcome;
 use tracing::warn;
 
-use super::State;
+use super::{State, WorkerState};
 use crate::evaluator::{Completion, Origin, Task};
 use crate::ids::{TaskId, WorkerId};
+use crate::principal::Principal;
+
+/// Whose errors count as one: a trusted worker speaks for itself, an outside worker for its
+/// principal, so one credential cannot fail a task by registering several times.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(super) enum Voice {
+    Worker(WorkerId),
+    Principal(Principal),
+}
+
+impl std::fmt::Display for Voice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Voice::Worker(w) => write!(f, "{w}"),
+            Voice::Principal(p) => write!(f, "{p}"),
+        }
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Phase {
     Queued,
     Leased {
         worker: WorkerId,
+        /// When it was granted, to measure how long evaluations take.
+        granted: Instant,
         /// When the lease lapses unless its holder heartbeats.
         deadline: Instant,
         /// When it lapses whatever the holder says (`QueueRules::max_lease` after the grant).
@@ -43,34 +63,43 @@ pub(super) struct TaskState {
     pub(super) phase: Phase,
     /// Every worker the task was ever leased to: only they may report it.
     pub(super) leased_to: Vec<WorkerId>,
-    /// Errors, at most one per worker.
-    pub(super) errors: Vec<(WorkerId, String)>,
-    /// The worker this task is kept from: a check is never evaluated by its claimant.
-    pub(super) excluded: Option<WorkerId>,
+    /// Errors, at most one per voice.
+    pub(super) errors: Vec<(Voice, String)>,
+    /// The principal whose claim this task checks: it may be evaluated only by a principal that
+    /// may check that one ([`Principal::may_be_checked_by`]).
+    pub(super) checks: Option<Principal>,
+    /// Principals whose lease on it lapsed or who handed it back: it goes to another first.
+    pub(super) returned_by: Vec<Principal>,
     /// Whether "no live worker can take it" was logged since the last change of workers.
     unservable_logged: bool,
 }
 
 impl TaskState {
-    pub(super) fn new(task: Task, slot: usize, excluded: Option<WorkerId>) -> Self {
+    pub(super) fn new(task: Task, slot: usize, checks: Option<Principal>) -> Self {
         Self {
             task: Arc::new(task),
             slot,
             phase: Phase::Queued,
             leased_to: Vec::new(),
             errors: Vec::new(),
-            excluded,
+            checks,
+            returned_by: Vec::new(),
             unservable_logged: false,
         }
     }
 
-    pub(super) fn failed_by(&self, worker: WorkerId) -> bool {
-        self.errors.iter().any(|(w, _)| *w == worker)
+    pub(super) fn failed_by(&self, voice: &Voice) -> bool {
+        self.errors.iter().any(|(v, _)| v == voice)
     }
 
-    /// Whether `worker` may be leased this task: it has not failed it and is not its claimant.
-    pub(super) fn may_take(&self, worker: WorkerId) -> bool {
-        !self.failed_by(worker) && self.excluded != Some(worker)
+    /// Whether worker `id` may be leased this task: its voice has not failed it, and for a check,
+    /// its principal may check the claimant's.
+    pub(super) fn may_take(&self, id: WorkerId, w: &WorkerState) -> bool {
+        !self.failed_by(&w.voice(id))
+            && self
+                .checks
+                .as_ref()
+                .is_none_or(|claimant| claimant.may_be_checked_by(&w.principal))
     }
 }
 
@@ -83,13 +112,21 @@ impl State {
         now: Instant,
         rules: &super::QueueRules,
     ) -> Arc<Task> {
-        let expires = now + rules.max_lease;
+        // The coordinator's own workers never hoard: only `max_lease` bounds them.
+        let trusted = self.workers.get(&worker).is_some_and(|w| w.trusted);
+        let lifetime = if trusted {
+            rules.max_lease
+        } else {
+            self.lease_lifetime(rules)
+        };
+        let expires = now + lifetime;
         let deadline = (now + rules.lease).min(expires);
         let t = self.tasks.get_mut(&id).expect("granted tasks exist");
         debug_assert_eq!(t.phase, Phase::Queued);
         self.queued.remove(&id);
         t.phase = Phase::Leased {
             worker,
+            granted: now,
             deadline,
             expires,
         };
@@ -118,14 +155,23 @@ impl State {
         }
     }
 
-    /// Leased → queued, or → failed when enough different workers have given up on it.
-    pub(super) fn requeue_or_fail(&mut self, id: TaskId, max_attempts: u32) {
+    /// Leased → queued, or → failed when enough different voices have given up on it. A task
+    /// whose lease lapsed or was handed back (`returned`) goes to another principal first.
+    pub(super) fn requeue_or_fail(&mut self, id: TaskId, max_attempts: u32, returned: bool) {
         let Some(t) = self.tasks.get(&id) else { return };
-        if !matches!(t.phase, Phase::Leased { .. }) {
+        let Phase::Leased { worker, .. } = t.phase else {
             return;
-        }
+        };
+        let holder = self.workers.get(&worker).map(|w| w.principal.clone());
         self.leave_phase(id);
         let t = self.tasks.get_mut(&id).expect("checked above");
+        if returned
+            && let Some(p) = holder
+            && !p.is_local()
+            && !t.returned_by.contains(&p)
+        {
+            t.returned_by.push(p);
+        }
         t.phase = Phase::Queued;
         t.unservable_logged = false;
         self.queued.insert(id);
@@ -139,9 +185,9 @@ impl State {
             return;
         }
         warn!(task = %id, attempts = t.errors.len(), "task failed on every attempt: marked failed");
-        let reasons: Vec<String> = t.errors.iter().map(|(w, e)| format!("{w}: {e}")).collect();
+        let reasons: Vec<String> = t.errors.iter().map(|(v, e)| format!("{v}: {e}")).collect();
         let outcome = Outcome::failed(Failure::Internal(format!(
-            "no worker could evaluate it ({} workers): {}",
+            "no worker could evaluate it ({} principals): {}",
             t.errors.len(),
             reasons.join("; ")
         )));
@@ -164,9 +210,14 @@ impl State {
         self.complete(id, outcome, by, origin, wall_seconds);
     }
 
-    /// `Err(Quarantined)` for a worker caught disagreeing with a check.
-    pub(super) fn refuse_quarantined(&self, worker: WorkerId) -> Result<(), super::QueueError> {
-        if self.quarantined.contains(&worker) {
+    /// `Err(Quarantined)` for a worker caught disagreeing with a check, or one whose credential
+    /// was.
+    pub(super) fn refuse_quarantined(
+        &self,
+        worker: WorkerId,
+        principal: &Principal,
+    ) -> Result<(), super::QueueError> {
+        if self.quarantined.contains(&worker) || self.quarantined_principals.contains(principal) {
             return Err(super::QueueError::Quarantined(worker));
         }
         Ok(())
@@ -202,10 +253,10 @@ impl State {
         }
         for &id in &self.queued {
             let t = self.tasks.get_mut(&id).expect("queued tasks exist");
-            // A check no one may take goes to the coordinator itself (`orphan_checks`).
+            // A check no one may take goes to the coordinator itself (`orphans`).
             if !t.unservable_logged
                 && !id.is_check()
-                && self.workers.keys().all(|&w| !t.may_take(w))
+                && self.workers.iter().all(|(&id, w)| !t.may_take(id, w))
             {
                 t.unservable_logged = true;
                 warn!(task = %id, failed_by = t.errors.len(), "every connected worker failed this task: it waits for another worker");
@@ -230,12 +281,12 @@ impl State {
             ));
         }
         for (&id, t) in &self.tasks {
-            let mut seen = BTreeSet::new();
-            if !t.errors.iter().all(|(w, _)| seen.insert(*w)) {
-                return Err(format!("{id}: two errors from one worker"));
+            let mut seen = std::collections::HashSet::new();
+            if !t.errors.iter().all(|(v, _)| seen.insert(v.clone())) {
+                return Err(format!("{id}: two errors from one voice"));
             }
             if t.phase == Phase::Failed && (t.errors.len() as u32) < max_attempts {
-                return Err(format!("{id} failed after {} workers", t.errors.len()));
+                return Err(format!("{id} failed after {} voices", t.errors.len()));
             }
             if let Phase::Leased { worker, .. } = t.phase
                 && !self
@@ -247,7 +298,8 @@ impl State {
             }
         }
         for (&wid, w) in &self.workers {
-            if self.quarantined.contains(&wid) {
+            if self.quarantined.contains(&wid) || self.quarantined_principals.contains(&w.principal)
+            {
                 return Err(format!("{wid} is quarantined yet still registered"));
             }
             if w.leased.len() > w.capacity as usize {

@@ -1,6 +1,7 @@
 //! What a worker may ask of the queue: to register, to lease tasks, to report outcomes, to
-//! heartbeat its leases, and to hand them back or leave. Each call checks that the worker is one
-//! this queue issued and not quarantined before it touches a task (the rules in `mod.rs`).
+//! heartbeat its leases, and to hand them back or leave. Each call first proves who makes it (a
+//! worker this queue issued, with its session secret, under the credential that registered it,
+//! not quarantined) before it touches a task (the rules in `mod.rs`).
 
 use std::collections::{BTreeSet, HashSet};
 use std::sync::Arc;
@@ -9,30 +10,48 @@ use std::time::Instant;
 use amorph::task::Outcome;
 use tracing::{info, warn};
 
-use super::task::Phase;
-use super::{Disposition, MAX_WORKERS, QueueError, TaskQueue, WorkerState, seen};
-use crate::evaluator::{Origin, Task};
+use super::task::{Phase, Voice};
+use super::{Caller, Disposition, MAX_WORKERS, QueueError, State, TaskQueue, WorkerState};
+use crate::evaluator::{Claimant, Origin, Task};
 use crate::ids::{TaskId, WorkerId};
+use crate::principal::Principal;
 
 impl TaskQueue {
-    /// Registers a worker; `name` must already be cleaned of control characters. A `trusted`
-    /// worker's outcomes are final without a check. At most [`MAX_WORKERS`] outside workers are
-    /// registered at once (a silent one is dropped after `worker_timeout`), so registrations
-    /// cannot grow the coordinator's memory without bound.
+    /// Registers a worker of `principal`; `name` must already be cleaned of control characters.
+    /// A `trusted` worker's outcomes are final without a check. An outside worker's capacity is
+    /// capped at `max_capacity`; at most `max_workers_per_credential` are registered per principal
+    /// (over it, the principal's longest-idle registration that holds no lease and is not waiting
+    /// for work makes room, else the call is refused) and [`MAX_WORKERS`] in all, so
+    /// registrations cannot grow the coordinator's memory without bound or crowd out another
+    /// principal. Returns the worker's id and session secret.
     pub fn register(
         &self,
         name: &str,
         capacity: u32,
+        principal: Principal,
         trusted: bool,
         now: Instant,
-    ) -> Result<WorkerId, QueueError> {
-        let mut s = self.lock();
-        if !trusted && s.workers.values().filter(|w| !w.trusted).count() >= MAX_WORKERS {
-            warn!(
-                name,
-                "registration refused: {MAX_WORKERS} outside workers already registered"
-            );
-            return Err(QueueError::TooManyWorkers);
+    ) -> Result<Caller, QueueError> {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        if s.quarantined_principals.contains(&principal) {
+            warn!(name, %principal, "registration refused: the credential is quarantined");
+            return Err(QueueError::Quarantined(WorkerId {
+                serial: 0,
+                tag: self.tag,
+            }));
+        }
+        let mut capacity = capacity;
+        if !trusted {
+            capacity = capacity.min(self.rules.max_capacity);
+            self.make_room(s, &principal, now)?;
+            if s.workers.values().filter(|w| !w.trusted).count() >= MAX_WORKERS {
+                warn!(
+                    name,
+                    "registration refused: {MAX_WORKERS} outside workers already registered"
+                );
+                return Err(QueueError::TooManyWorkers);
+            }
         }
         s.next_worker += 1;
         let id = WorkerId {
@@ -43,52 +62,128 @@ impl TaskQueue {
             id,
             WorkerState {
                 name: name.to_owned(),
+                principal: principal.clone(),
                 capacity,
                 last_seen: now,
                 leased: HashSet::new(),
                 trusted,
                 last_asked: now,
+                wants: 0,
                 told_finished: false,
             },
         );
-        info!(worker = %id, name, capacity, trusted, "worker registered");
-        Ok(id)
+        info!(worker = %id, name, %principal, capacity, trusted, "worker registered");
+        Ok(Caller {
+            worker: id,
+            session: self.sessions.secret(id, &principal),
+            principal,
+        })
     }
 
-    /// Up to `max` queued tasks for `worker`, capped by the capacity it registered with minus what
-    /// it holds, skipping tasks it already failed. Returns the tasks and whether the run has
-    /// finished.
+    /// Below the per-credential limit, or one idle registration of `principal` dropped.
+    fn make_room(&self, s: &mut State, principal: &Principal, now: Instant) -> Result<(), QueueError> {
+        let limit = self.rules.max_workers_per_credential;
+        let mine = || s.workers.iter().filter(|(_, w)| w.principal == *principal);
+        if mine().count() < limit {
+            return Ok(());
+        }
+        let idle = mine()
+            .filter(|(_, w)| w.leased.is_empty() && !w.waiting(now))
+            .min_by_key(|&(&id, w)| (w.last_asked, id))
+            .map(|(&id, _)| id);
+        let Some(idle) = idle else {
+            warn!(%principal, limit, "registration refused: every registration of this credential is at work");
+            return Err(QueueError::TooManyForCredential {
+                principal: principal.to_string(),
+                limit,
+            });
+        };
+        s.workers.remove(&idle);
+        s.stats.evicted += 1;
+        info!(worker = %idle, %principal, "idle registration dropped to make room for a new one of its credential");
+        Ok(())
+    }
+
+    /// Whether `caller` is a worker this process issued, with its own session secret, and not
+    /// quarantined. A worker the reaper dropped still passes (its late outcomes count).
+    fn authenticate(&self, s: &State, caller: &Caller) -> Result<(), QueueError> {
+        let w = caller.worker;
+        if w.tag != self.tag || w.serial < 1 || w.serial > s.next_worker {
+            return Err(QueueError::UnknownWorker(w));
+        }
+        if !self.sessions.verify(w, &caller.principal, &caller.session) {
+            warn!(worker = %w, principal = %caller.principal, "call with a wrong session secret refused");
+            return Err(QueueError::BadSession(w));
+        }
+        s.refuse_quarantined(w, &caller.principal)
+    }
+
+    /// The registered worker making an authenticated call, marked as just heard from.
+    fn seen<'a>(
+        &self,
+        s: &'a mut State,
+        caller: &Caller,
+        now: Instant,
+    ) -> Result<&'a mut WorkerState, QueueError> {
+        self.authenticate(s, caller)?;
+        let w = s
+            .workers
+            .get_mut(&caller.worker)
+            .ok_or(QueueError::UnknownWorker(caller.worker))?;
+        w.last_seen = now;
+        Ok(w)
+    }
+
+    /// Up to `max` queued tasks for the caller, capped by its capacity minus what it holds and by
+    /// its principal's share while others wait, skipping tasks its voice failed, checks its
+    /// principal may not make, and tasks it gave back while another principal waits for them.
+    /// Returns the tasks and whether the run has finished.
     pub fn lease(
         &self,
-        worker: WorkerId,
+        caller: &Caller,
         max: u32,
         now: Instant,
     ) -> Result<(Vec<Arc<Task>>, bool), QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
-        s.refuse_quarantined(worker)?;
-        let w = seen(&mut s.workers, worker, now)?;
-        if s.run_finished {
+        let worker = caller.worker;
+        let finished = s.run_finished;
+        let w = self.seen(s, caller, now)?;
+        if finished {
             w.told_finished = true;
             return Ok((Vec::new(), true));
         }
-        let room = w.capacity.saturating_sub(w.leased.len() as u32).min(max) as usize;
+        let room = w.capacity.saturating_sub(w.leased.len() as u32).min(max);
         // Asking for nothing is not asking: only a call with room counts as a worker at work.
         if room > 0 {
             w.last_asked = now;
         }
+        let allowed = s.allowance(worker, room, now) as usize;
+        let me = &s.workers[&worker];
         let chosen: Vec<TaskId> = s
             .queued
             .iter()
-            .filter(|&&id| s.tasks[&id].may_take(worker))
-            .take(room)
+            .filter(|&&id| {
+                let t = &s.tasks[&id];
+                t.may_take(worker, me) && !s.goes_to_another_first(t, &me.principal, now)
+            })
+            .take(allowed)
             .copied()
             .collect();
         let granted: Vec<Arc<Task>> = chosen
             .into_iter()
             .map(|id| s.grant(id, worker, now, &self.rules))
             .collect();
+        if let Some(w) = s.workers.get_mut(&worker) {
+            w.wants = room - granted.len() as u32;
+        }
         s.stats.dispatched += granted.len() as u64;
+        let held_back = (allowed as u32) < room && !s.queued.is_empty();
+        drop(guard);
+        if held_back {
+            // Its share held this worker back for others who wait: wake them to take theirs.
+            self.work.notify_waiters();
+        }
         Ok((granted, false))
     }
 
@@ -102,18 +197,16 @@ impl TaskQueue {
     /// evaluating (`error` must already be cleaned of control characters).
     pub fn report(
         &self,
-        worker: WorkerId,
+        caller: &Caller,
         task: TaskId,
         result: Result<Outcome, String>,
         wall_seconds: f64,
         now: Instant,
     ) -> Result<Disposition, QueueError> {
         let mut guard = self.lock();
-        if !self.issued(&guard, worker) {
-            return Err(QueueError::UnknownWorker(worker));
-        }
         let s = &mut *guard;
-        s.refuse_quarantined(worker)?;
+        self.authenticate(s, caller)?;
+        let worker = caller.worker;
         let Some(t) = s.tasks.get_mut(&task) else {
             return match s.earlier.get(&task) {
                 Some(leased_to) if leased_to.contains(&worker) => {
@@ -127,26 +220,45 @@ impl TaskQueue {
         if !t.leased_to.contains(&worker) {
             return Err(QueueError::NotLeasedTo { task, worker });
         }
-        if t.phase.is_final() || t.failed_by(worker) {
+        let (by, trusted) = match s.workers.get(&worker) {
+            Some(w) => (format!("{} ({worker})", w.name), w.trusted),
+            None => (worker.to_string(), caller.principal.is_local()),
+        };
+        let voice = if trusted {
+            Voice::Worker(worker)
+        } else {
+            Voice::Principal(caller.principal.clone())
+        };
+        if t.phase.is_final() || t.failed_by(&voice) {
             s.stats.duplicates += 1;
             return Ok(Disposition::Duplicate);
         }
+        let holder = match t.phase {
+            Phase::Leased {
+                worker: holder,
+                granted,
+                ..
+            } if holder == worker => Some(granted),
+            _ => None,
+        };
         let disposition = match result {
             Ok(outcome) => {
-                let (by, trusted) = match s.workers.get_mut(&worker) {
-                    Some(w) => {
-                        // A worker whose evaluation outlasted a lease has not asked for a lease's
-                        // length, yet it is at work: without this, a check queued meanwhile
-                        // counts as one no worker may take, and the coordinator makes it.
-                        w.last_asked = now;
-                        (format!("{} ({worker})", w.name), w.trusted)
-                    }
-                    None => (worker.to_string(), false),
-                };
+                if let Some(w) = s.workers.get_mut(&worker) {
+                    // A worker whose evaluation outlasted a lease has not asked for a lease's
+                    // length, yet it is at work: without this, a check queued meanwhile
+                    // counts as one no worker may take, and the coordinator makes it.
+                    w.last_asked = now;
+                }
+                if let Some(granted) = holder {
+                    s.measure(granted, now);
+                }
                 let origin = if trusted {
                     Origin::Trusted
                 } else {
-                    Origin::Claim(worker)
+                    Origin::Claim(Claimant {
+                        worker,
+                        principal: caller.principal.clone(),
+                    })
                 };
                 s.finish(task, outcome, by, origin, wall_seconds);
                 Disposition::Accepted
@@ -154,16 +266,13 @@ impl TaskQueue {
             Err(error) => {
                 s.stats.worker_errors += 1;
                 warn!(%worker, %task, %error, "worker could not evaluate a task");
-                t.errors.push((worker, error.clone()));
+                t.errors.push((voice, error.clone()));
                 s.noted_errors.push((task, worker, error));
                 // A former holder's error leaves the current holder's lease alone: only the
                 // holder's own error, or a lease coming back, decides what happens next.
-                let phase = s.tasks[&task].phase;
-                match phase {
-                    Phase::Leased { worker: holder, .. } if holder == worker => {
-                        s.requeue_or_fail(task, self.rules.max_attempts);
-                    }
-                    Phase::Queued => s.fail_if_exhausted(task, self.rules.max_attempts),
+                match (holder, s.tasks[&task].phase) {
+                    (Some(_), _) => s.requeue_or_fail(task, self.rules.max_attempts, false),
+                    (None, Phase::Queued) => s.fail_if_exhausted(task, self.rules.max_attempts),
                     _ => {}
                 }
                 Disposition::ErrorNoted
@@ -176,18 +285,19 @@ impl TaskQueue {
         Ok(disposition)
     }
 
-    /// A worker is alive and still evaluating `active`: extend those leases. Returns the tasks of
-    /// `active` it no longer holds, and whether the run has finished.
+    /// A worker is alive and still evaluating `active`: extend those leases (never past their
+    /// lifetime). Returns the tasks of `active` it no longer holds, and whether the run has
+    /// finished.
     pub fn heartbeat(
         &self,
-        worker: WorkerId,
+        caller: &Caller,
         active: &[TaskId],
         now: Instant,
     ) -> Result<(Vec<TaskId>, bool), QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
-        s.refuse_quarantined(worker)?;
-        seen(&mut s.workers, worker, now)?.told_finished |= s.run_finished;
+        let finished = s.run_finished;
+        self.seen(s, caller, now)?.told_finished |= finished;
         let mut revoked = Vec::new();
         for &id in active {
             match s.tasks.get_mut(&id).map(|t| &mut t.phase) {
@@ -195,29 +305,32 @@ impl TaskQueue {
                     worker: holder,
                     deadline,
                     expires,
-                }) if *holder == worker => *deadline = (now + self.rules.lease).min(*expires),
+                    ..
+                }) if *holder == caller.worker => {
+                    *deadline = (now + self.rules.lease).min(*expires);
+                }
                 _ => revoked.push(id),
             }
         }
-        Ok((revoked, s.run_finished))
+        Ok((revoked, finished))
     }
 
     /// A worker hands back leases it will not finish (it is shutting down).
-    pub fn release(&self, worker: WorkerId, ids: &[TaskId]) -> Result<u32, QueueError> {
+    pub fn release(&self, caller: &Caller, ids: &[TaskId]) -> Result<u32, QueueError> {
         let mut guard = self.lock();
         let s = &mut *guard;
-        s.refuse_quarantined(worker)?;
+        self.authenticate(s, caller)?;
         let w = s
             .workers
-            .get(&worker)
-            .ok_or(QueueError::UnknownWorker(worker))?;
+            .get(&caller.worker)
+            .ok_or(QueueError::UnknownWorker(caller.worker))?;
         let held: BTreeSet<TaskId> = ids
             .iter()
             .filter(|&&id| w.leased.contains(&id))
             .copied()
             .collect();
         for &id in &held {
-            s.requeue_or_fail(id, self.rules.max_attempts);
+            s.requeue_or_fail(id, self.rules.max_attempts, true);
         }
         drop(guard);
         if !held.is_empty() {
@@ -230,9 +343,9 @@ impl TaskQueue {
     /// forgotten at once, so neither the reaper (which would warn that it went silent) nor the
     /// end of a finished run (which waits until every registered worker has heard of it) waits a
     /// `worker_timeout` for it.
-    pub fn leave(&self, worker: WorkerId, ids: &[TaskId]) -> Result<u32, QueueError> {
-        let released = self.release(worker, ids)?;
-        self.lock().workers.remove(&worker);
+    pub fn leave(&self, caller: &Caller, ids: &[TaskId]) -> Result<u32, QueueError> {
+        let released = self.release(caller, ids)?;
+        self.lock().workers.remove(&caller.worker);
         Ok(released)
     }
 }

@@ -1,0 +1,158 @@
+//! How much of the queue one worker may take, and for how long.
+//!
+//! - **Share.** While workers of other principals wait for work, a principal holds at most its
+//!   max-min fair share of the batch's open tasks (queued or leased), whatever the capacities its
+//!   workers declare: a worker asking for 1,024 tasks beside one asking for 1 leaves that one its
+//!   task. With nobody else waiting, a worker takes up to its capacity.
+//! - **Return.** A task whose lease lapsed or was handed back goes to another principal first.
+//! - **Lifetime.** A lease lives at most eight times the median time between a grant and its
+//!   report over the last [`SAMPLES`] reports (measured here, not taken from workers), within
+//!   `[lease, max_lease]`: a worker that names its leases in every heartbeat and never reports
+//!   keeps them for a few evaluations' time, not for `max_lease`.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::time::{Duration, Instant};
+
+use super::task::TaskState;
+use super::{QueueRules, State, WorkerState};
+use crate::ids::WorkerId;
+use crate::principal::Principal;
+
+/// Reports the lease lifetime is measured over.
+pub(super) const SAMPLES: usize = 64;
+/// Reports measured before the lifetime follows them (until then: `max_lease`).
+const MIN_SAMPLES: usize = 8;
+/// Lifetime in medians of the measured evaluation time.
+const MEDIANS_PER_LIFETIME: u32 = 8;
+/// A worker whose lease call left slots unfilled this recently is waiting for work (a lease call
+/// waits at most 5 s before it asks again).
+pub(super) const WAITING_WINDOW: Duration = Duration::from_secs(6);
+
+impl WorkerState {
+    pub(super) fn waiting(&self, now: Instant) -> bool {
+        self.wants > 0 && now.saturating_duration_since(self.last_asked) <= WAITING_WINDOW
+    }
+}
+
+/// Max-min fair division of `total` among `demands`: each gets its demand or an equal part of
+/// what is left, whichever is smaller (parts rounded up, so nothing is left over for want of a
+/// unit).
+pub(super) fn max_min(total: u64, demands: &[u64]) -> Vec<u64> {
+    let mut order: Vec<usize> = (0..demands.len()).collect();
+    // Stable: among equal demands the earlier gets the part rounded up.
+    order.sort_by_key(|&i| demands[i]);
+    let mut alloc = vec![0; demands.len()];
+    let mut left = total;
+    for (k, &i) in order.iter().enumerate() {
+        let part = left.div_ceil((demands.len() - k) as u64);
+        alloc[i] = demands[i].min(part);
+        left = left.saturating_sub(alloc[i]);
+    }
+    alloc
+}
+
+impl State {
+    /// How many of `room` slots `worker` may fill now. Another worker's demand is what it waits
+    /// for and may take (a check it may not make, a task it failed, are no demand of its).
+    pub(super) fn allowance(&self, worker: WorkerId, room: u32, now: Instant) -> u32 {
+        let me = &self.workers[&worker];
+        // Per principal: tasks held, and tasks its workers wait for. The caller's principal goes
+        // first, so a tie is broken in favour of the worker that is asking.
+        let mut principals: BTreeMap<(bool, &Principal), (u64, u64)> = BTreeMap::new();
+        let mut others_wait = false;
+        for (&id, w) in &self.workers {
+            let entry = principals
+                .entry((w.principal != me.principal, &w.principal))
+                .or_default();
+            entry.0 += w.leased.len() as u64;
+            if id == worker {
+                entry.1 += u64::from(room);
+            } else if w.waiting(now) {
+                let wanted = self
+                    .queued
+                    .iter()
+                    .filter(|t| self.tasks[t].may_take(id, w))
+                    .take(w.wants as usize)
+                    .count() as u64;
+                entry.1 += wanted;
+                others_wait |= wanted > 0 && w.principal != me.principal;
+            }
+        }
+        if !others_wait {
+            return room;
+        }
+        let open = self.queued.len() as u64 + principals.values().map(|p| p.0).sum::<u64>();
+        let demands: Vec<u64> = principals.values().map(|(held, wants)| held + wants).collect();
+        let alloc = max_min(open, &demands);
+        let held = principals[&(false, &me.principal)].0;
+        alloc[0].saturating_sub(held).min(u64::from(room)) as u32
+    }
+
+    /// Whether `t` should wait for another principal: `principal` handed it back or let its lease
+    /// lapse, and a worker of another principal that may take it is waiting.
+    pub(super) fn goes_to_another_first(
+        &self,
+        t: &TaskState,
+        principal: &Principal,
+        now: Instant,
+    ) -> bool {
+        t.returned_by.contains(principal)
+            && self.workers.iter().any(|(&id, w)| {
+                w.principal != *principal && w.waiting(now) && t.may_take(id, w)
+            })
+    }
+
+    /// How long a lease granted now may live, heartbeats or not.
+    pub(super) fn lease_lifetime(&self, rules: &QueueRules) -> Duration {
+        lifetime(&self.lease_times, rules)
+    }
+
+    pub(super) fn measure(&mut self, granted: Instant, now: Instant) {
+        if self.lease_times.len() == SAMPLES {
+            self.lease_times.pop_front();
+        }
+        self.lease_times
+            .push_back(now.saturating_duration_since(granted));
+    }
+}
+
+fn lifetime(samples: &VecDeque<Duration>, rules: &QueueRules) -> Duration {
+    if samples.len() < MIN_SAMPLES {
+        return rules.max_lease;
+    }
+    let mut sorted: Vec<Duration> = samples.iter().copied().collect();
+    sorted.sort_unstable();
+    (sorted[sorted.len() / 2] * MEDIANS_PER_LIFETIME).clamp(rules.lease.min(rules.max_lease), rules.max_lease)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn max_min_gives_small_demands_in_full_and_splits_the_rest_evenly() {
+        assert_eq!(max_min(48, &[256, 1]), [47, 1]);
+        assert_eq!(max_min(48, &[256, 256]), [24, 24]);
+        assert_eq!(max_min(10, &[3, 100, 100]), [3, 4, 3]);
+        assert_eq!(max_min(5, &[1, 1]), [1, 1]);
+        assert_eq!(max_min(0, &[4, 4]), [0, 0]);
+        // Rounded up: never less than an even split.
+        assert_eq!(max_min(5, &[9, 9]), [3, 2]);
+    }
+
+    #[test]
+    fn the_lifetime_follows_the_median_within_its_bounds() {
+        let rules = QueueRules {
+            lease: Duration::from_secs(10),
+            max_lease: Duration::from_secs(600),
+            ..QueueRules::default()
+        };
+        let ms = |v: &[u64]| v.iter().map(|&m| Duration::from_millis(m)).collect();
+        assert_eq!(lifetime(&ms(&[5000; 7]), &rules), rules.max_lease, "too few");
+        assert_eq!(lifetime(&ms(&[40; 8]), &rules), rules.lease, "floor");
+        // Median 5 s, which three slow outliers do not move: 40 s.
+        let mixed = ms(&[5000, 5000, 5000, 5000, 5000, 9_000_000, 9_000_000, 9_000_000]);
+        assert_eq!(lifetime(&mixed, &rules), Duration::from_secs(40));
+        assert_eq!(lifetime(&ms(&[200_000; 8]), &rules), rules.max_lease, "ceiling");
+    }
+}
