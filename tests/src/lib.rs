@@ -69,6 +69,13 @@ pub fn small_beam_config(results_dir: &Path, evaluations: u64, seed: u64) -> Run
     )
 }
 
+/// The fingerprint of `small_beam_config(evaluations, seed)` run cleanly in this process: what
+/// every attacked or faulty cluster run of it must end equal to.
+pub fn clean_small_beam(evaluations: u64, seed: u64) -> String {
+    let dir = scratch_dir(&format!("reference-{evaluations}-{seed}"));
+    fingerprint(&run_locally(&small_beam_config(&dir, evaluations, seed), 2))
+}
+
 /// Runs a config in this process on `threads` evaluation threads: the reference every cluster
 /// run must match bit for bit.
 pub fn run_locally(config: &RunConfig, threads: usize) -> RunSummary {

@@ -8,25 +8,15 @@ use amorph_proto::v1::{self, task_result};
 use amorph_proto::{PROTOCOL_VERSION, convert};
 use amorph_tests::peer::{Peer, client, forged, runtime, swapped};
 use amorph_tests::{
-    ClusterRun, TestWorker, fingerprint, run_locally, scratch_dir, small_beam_config,
+    ClusterRun, TestWorker, clean_small_beam, fingerprint, scratch_dir, small_beam_config,
 };
 use tonic::Code;
 
 const EVALUATIONS: u64 = 120;
 const SEED: u64 = 12;
 
-/// The clean run every attacked run must end equal to, computed once per test process (the tests
-/// run in parallel and would otherwise share its results folder).
 fn reference() -> String {
-    static REFERENCE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
-    REFERENCE
-        .get_or_init(|| {
-            fingerprint(&run_locally(
-                &small_beam_config(&scratch_dir("hostile-reference"), EVALUATIONS, SEED),
-                2,
-            ))
-        })
-        .clone()
+    clean_small_beam(EVALUATIONS, SEED)
 }
 
 /// An outcome is a claim checked against what the run's scene can produce. A beam profile station

@@ -98,19 +98,22 @@ fn a_worker_takes_no_more_than_its_share_while_another_principal_waits() {
     assert_eq!(q.lease(&hoarder, 1024, later).unwrap().0.len(), 6);
 }
 
-/// A worker that names its leases in every heartbeat and never reports keeps them only for the
-/// lease lifetime, which follows measured evaluation times; the tasks then go to another
-/// principal first, even while the hoarder asks for them again.
+/// A worker that names its leases in every heartbeat and never reports keeps them only while no
+/// other principal waits for work: a waiting worker takes over a task held past twice the median
+/// evaluation time, and every lease lapses at its lifetime, which follows measured evaluation
+/// times. What lapsed goes to another principal first.
 #[test]
-fn a_hoarded_lease_lapses_after_a_few_evaluation_times_and_goes_elsewhere_first() {
+fn a_hoarded_task_is_taken_over_by_a_waiting_worker_and_lapses_at_its_lifetime() {
     let q = TaskQueue::new(QueueRules {
         lease: Duration::from_secs(2),
+        heartbeat_interval: Duration::from_millis(100),
         max_lease: Duration::from_secs(3600),
         ..rules()
     });
     let t0 = Instant::now();
     let honest = outside(&q, "honest", 1, t0).unwrap();
-    // Eight honest evaluations of 100 ms each set the lifetime: 8 × 100 ms, within [lease, ...].
+    // Eight honest evaluations of 100 ms each: backups after 200 ms, a lifetime of
+    // 8 × 100 ms raised to the 2 s lease.
     let _rx = q.submit(tasks(1..=8));
     let mut now = t0;
     for id in 1..=8 {
@@ -121,25 +124,38 @@ fn a_hoarded_lease_lapses_after_a_few_evaluation_times_and_goes_elsewhere_first(
     let hoarder = under(&q, "hoarder", "mallory", 4, now);
     let _rx = q.submit(tasks(9..=12));
     assert_eq!(q.lease(&hoarder, 4, now).unwrap().0.len(), 4);
-    let start = now;
-    while now < start + Duration::from_secs(2) {
-        now += Duration::from_millis(500);
-        q.heartbeat(&hoarder, &[TaskId(9), TaskId(10), TaskId(11), TaskId(12)], now)
-            .unwrap();
-        // The honest worker keeps asking for work, and gets none while all is held.
-        assert!(q.lease(&honest, 1, now).unwrap().0.is_empty());
-        q.reap(now);
-    }
-    assert_eq!(q.stats().queued, 4, "the lifetime, 2 s, is over: back in the queue");
-    assert!(
-        q.lease(&hoarder, 4, now).unwrap().0.is_empty(),
-        "another principal waits for what it let lapse"
-    );
-    assert_eq!(ids(&q.lease(&honest, 1, now).unwrap().0), [9]);
+    let held = [TaskId(9), TaskId(10), TaskId(11), TaskId(12)];
+    assert!(q.lease(&honest, 1, now + Duration::from_millis(150)).unwrap().0.is_empty());
+    now += Duration::from_millis(250);
     assert_eq!(
-        q.lease(&hoarder, 4, now).unwrap().0.len(),
-        3,
-        "with nobody else waiting it may take them again"
+        ids(&q.lease(&honest, 1, now).unwrap().0),
+        [9],
+        "held past the backup time: taken over"
+    );
+    assert_eq!(q.heartbeat(&hoarder, &held, now).unwrap().0, [TaskId(9)]);
+    // The hoarder keeps naming the rest; at 2 s they lapse all the same.
+    now += Duration::from_millis(1800);
+    q.heartbeat(&hoarder, &held, now).unwrap();
+    q.reap(now);
+    assert_eq!(q.stats().queued, 3, "the lifetime is over: back in the queue");
+
+    // What a principal handed back waits for another principal that waits for work.
+    let q = TaskQueue::new(rules());
+    let mallory = under(&q, "m", "mallory", 2, t0);
+    let carol = outside(&q, "carol", 1, t0).unwrap();
+    let _rx = q.submit(tasks(1..=2));
+    assert_eq!(q.lease(&mallory, 2, t0).unwrap().0.len(), 2);
+    assert!(q.lease(&carol, 1, t0).unwrap().0.is_empty(), "carol waits");
+    assert_eq!(q.release(&mallory, &[T1, TaskId(2)]), Ok(2));
+    assert!(
+        q.lease(&mallory, 2, t0).unwrap().0.is_empty(),
+        "handed back: carol's first"
+    );
+    assert_eq!(ids(&q.lease(&carol, 1, t0).unwrap().0), [1]);
+    assert_eq!(
+        ids(&q.lease(&mallory, 2, t0).unwrap().0),
+        [2],
+        "with nobody else waiting, it may take it again"
     );
 }
 

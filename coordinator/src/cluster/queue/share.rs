@@ -4,7 +4,12 @@
 //!   max-min fair share of the batch's open tasks (queued or leased), whatever the capacities its
 //!   workers declare: a worker asking for 1,024 tasks beside one asking for 1 leaves that one its
 //!   task. With nobody else waiting, a worker takes up to its capacity.
-//! - **Return.** A task whose lease lapsed or was handed back goes to another principal first.
+//! - **Return.** A task whose lease lapsed or was handed back goes to another principal first; a
+//!   check never goes back to the principal that let it lapse (the coordinator makes it).
+//! - **Backup.** A worker with room and nothing queued for it takes over a task another
+//!   principal's outside worker has held for more than twice the median evaluation time (the
+//!   backup tasks of MapReduce): the first outcome of either counts, so nobody's idle worker waits
+//!   on a task someone sits on.
 //! - **Lifetime.** A lease lives at most eight times the median time between a grant and its
 //!   report over the last [`SAMPLES`] reports (measured here, not taken from workers), within
 //!   `[lease, max_lease]`: a worker that names its leases in every heartbeat and never reports
@@ -89,7 +94,8 @@ impl State {
     }
 
     /// Whether `t` should wait for another principal: `principal` handed it back or let its lease
-    /// lapse, and a worker of another principal that may take it is waiting.
+    /// lapse, and it is a check (which then goes to the coordinator) or a worker of another
+    /// principal that may take it is waiting.
     pub(super) fn goes_to_another_first(
         &self,
         t: &TaskState,
@@ -97,14 +103,26 @@ impl State {
         now: Instant,
     ) -> bool {
         t.returned_by.contains(principal)
-            && self.workers.iter().any(|(&id, w)| {
-                w.principal != *principal && w.waiting(now) && t.may_take(id, w)
-            })
+            && (t.task.id.is_check()
+                || self.workers.iter().any(|(&id, w)| {
+                    w.principal != *principal && w.waiting(now) && t.may_take(id, w)
+                }))
     }
 
     /// How long a lease granted now may live, heartbeats or not.
     pub(super) fn lease_lifetime(&self, rules: &QueueRules) -> Duration {
         lifetime(&self.lease_times, rules)
+    }
+
+    /// How long another principal's outside worker may hold a task before a waiting worker takes
+    /// it over: twice the median measured evaluation, once measured (until then, `lease`).
+    pub(super) fn backup_after(&self, rules: &QueueRules) -> Duration {
+        match median(&self.lease_times) {
+            Some(m) if self.lease_times.len() >= MIN_SAMPLES => {
+                (m * 2).max(rules.heartbeat_interval)
+            }
+            _ => rules.lease,
+        }
     }
 
     pub(super) fn measure(&mut self, granted: Instant, now: Instant) {
@@ -116,13 +134,18 @@ impl State {
     }
 }
 
-fn lifetime(samples: &VecDeque<Duration>, rules: &QueueRules) -> Duration {
-    if samples.len() < MIN_SAMPLES {
-        return rules.max_lease;
-    }
+fn median(samples: &VecDeque<Duration>) -> Option<Duration> {
     let mut sorted: Vec<Duration> = samples.iter().copied().collect();
     sorted.sort_unstable();
-    (sorted[sorted.len() / 2] * MEDIANS_PER_LIFETIME).clamp(rules.lease.min(rules.max_lease), rules.max_lease)
+    sorted.get(sorted.len() / 2).copied()
+}
+
+fn lifetime(samples: &VecDeque<Duration>, rules: &QueueRules) -> Duration {
+    match median(samples) {
+        Some(m) if samples.len() >= MIN_SAMPLES => (m * MEDIANS_PER_LIFETIME)
+            .clamp(rules.lease.min(rules.max_lease), rules.max_lease),
+        _ => rules.max_lease,
+    }
 }
 
 #[cfg(test)]

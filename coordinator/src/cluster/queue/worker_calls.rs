@@ -170,8 +170,10 @@ impl TaskQueue {
             .take(allowed)
             .copied()
             .collect();
+        let backups = self.backups(s, worker, allowed - chosen.len(), now);
         let granted: Vec<Arc<Task>> = chosen
             .into_iter()
+            .chain(backups)
             .map(|id| s.grant(id, worker, now, &self.rules))
             .collect();
         if let Some(w) = s.workers.get_mut(&worker) {
@@ -185,6 +187,50 @@ impl TaskQueue {
             self.work.notify_waiters();
         }
         Ok((granted, false))
+    }
+
+    /// Up to `n` tasks held by other principals' outside workers for longer than the backup time
+    /// that `worker` may take, oldest grant first, taken back from their holders (whose outcome
+    /// still counts if it comes first) and requeued for `worker` to be granted.
+    fn backups(&self, s: &mut State, worker: WorkerId, n: usize, now: Instant) -> Vec<TaskId> {
+        if n == 0 {
+            return Vec::new();
+        }
+        let me = &s.workers[&worker];
+        let after = s.backup_after(&self.rules);
+        let mut held: Vec<(Instant, TaskId)> = s
+            .tasks
+            .iter()
+            .filter_map(|(&id, t)| match t.phase {
+                Phase::Leased {
+                    worker: holder,
+                    granted,
+                    ..
+                } if now.saturating_duration_since(granted) > after
+                    && t.may_take(worker, me)
+                    && s.workers.get(&holder).is_some_and(|h| {
+                        !h.trusted && h.principal != me.principal
+                    }) =>
+                {
+                    Some((granted, id))
+                }
+                _ => None,
+            })
+            .collect();
+        held.sort_unstable();
+        let taken: Vec<TaskId> = held.into_iter().take(n).map(|(_, id)| id).collect();
+        for &id in &taken {
+            s.requeue_or_fail(id, self.rules.max_attempts, true);
+        }
+        let taken: Vec<TaskId> = taken
+            .into_iter()
+            .filter(|id| s.tasks[id].phase == Phase::Queued)
+            .collect();
+        if !taken.is_empty() {
+            s.stats.expired_leases += taken.len() as u64;
+            info!(tasks = taken.len(), %worker, "tasks held past the backup time taken over by a waiting worker");
+        }
+        taken
     }
 
     /// The resolution a task asks for, while the queue holds it (to check a reported outcome
