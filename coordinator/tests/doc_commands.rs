@@ -89,6 +89,9 @@ fn words(command: &str) -> Vec<String> {
 
 #[test]
 fn every_documented_coordinator_command_checks() {
+    let scratch = std::env::temp_dir().join(format!("amorph-doc-commands-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&scratch);
+    std::fs::create_dir_all(&scratch).unwrap();
     let mut checked = 0;
     let mut failed = Vec::new();
     for page in pages() {
@@ -109,13 +112,23 @@ fn every_documented_coordinator_command_checks() {
                 Some(i) => rest[i + 1..].iter().collect(),
                 None => Vec::new(),
             };
-            let out = Command::new(env!("CARGO_BIN_EXE_coordinator"))
-                .args(&args)
-                .arg("--check")
-                .current_dir(root())
-                .env("AMORPH_TOKEN", "documentation")
-                .output()
-                .unwrap();
+            // `credentials` commands write files, so they run for real in a folder of their own;
+            // every other command only checks its config.
+            let out = if args.first().is_some_and(|a| *a == "credentials") {
+                Command::new(env!("CARGO_BIN_EXE_coordinator"))
+                    .args(&args)
+                    .current_dir(&scratch)
+                    .output()
+                    .unwrap()
+            } else {
+                Command::new(env!("CARGO_BIN_EXE_coordinator"))
+                    .args(&args)
+                    .arg("--check")
+                    .current_dir(root())
+                    .env("AMORPH_TOKEN", "documentation")
+                    .output()
+                    .unwrap()
+            };
             checked += 1;
             if !out.status.success() {
                 failed.push(format!(

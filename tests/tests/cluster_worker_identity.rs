@@ -332,7 +332,7 @@ fn a_checker_contradicting_many_claims_costs_the_coordinator_one_evaluation() {
     let dir = scratch_dir("identity-checker");
     let (mut config, tokens) = guarded(&dir, 140, &["claimant", "third"]);
     config.search.population = 50;
-    let initial = (config.search.population * config.search.islands) as usize;
+    let initial = config.search.population * config.search.islands;
     let mut reference = config.clone();
     reference.results_dir = scratch_dir("identity-checker-reference");
     reference.cluster.credentials_file = None;

@@ -44,8 +44,9 @@ struct Connect {
     #[arg(long, env = "AMORPH_TOKEN", hide_env_values = true)]
     token: Option<String>,
     /// File holding the token (a credential from `coordinator credentials add NAME`, or the
-    /// shared secret); surrounding whitespace is ignored.
-    #[arg(long, env = "AMORPH_TOKEN_FILE", conflicts_with = "token")]
+    /// shared secret); surrounding whitespace is ignored. Takes precedence over --token and
+    /// AMORPH_TOKEN.
+    #[arg(long, env = "AMORPH_TOKEN_FILE")]
     token_file: Option<PathBuf>,
     /// Name shown in the coordinator's logs and run store (default: host:pid).
     #[arg(long)]
