@@ -12,8 +12,8 @@ use amorph::task::memory;
 use tokio::sync::watch;
 use tracing::{info, warn};
 
-use crate::cluster::local::LocalWorker;
 use crate::cluster::credentials::Credentials;
+use crate::cluster::local::LocalWorker;
 use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Verify};
 use crate::config::RunConfig;
 use crate::progress::Progress;

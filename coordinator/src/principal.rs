@@ -103,12 +103,7 @@ impl Sessions {
         let Some(tag) = unhex(secret) else {
             return false;
         };
-        hmac::verify(
-            &self.key,
-            Self::message(worker, principal).as_bytes(),
-            &tag,
-        )
-        .is_ok()
+        hmac::verify(&self.key, Self::message(worker, principal).as_bytes(), &tag).is_ok()
     }
 }
 
@@ -140,8 +135,14 @@ mod tests {
         assert_eq!(secret.len(), 64, "256 bits");
         assert!(sessions.verify(w1, &alice, &secret));
         assert!(!sessions.verify(w2, &alice, &secret), "another worker's");
-        assert!(!sessions.verify(w1, &Principal::Shared, &secret), "another credential's");
-        assert!(!Sessions::new().verify(w1, &alice, &secret), "another process's");
+        assert!(
+            !sessions.verify(w1, &Principal::Shared, &secret),
+            "another credential's"
+        );
+        assert!(
+            !Sessions::new().verify(w1, &alice, &secret),
+            "another process's"
+        );
         let mut flipped = secret.clone().into_bytes();
         flipped[0] = if flipped[0] == b'0' { b'1' } else { b'0' };
         assert!(!sessions.verify(w1, &alice, std::str::from_utf8(&flipped).unwrap()));

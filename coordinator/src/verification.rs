@@ -67,7 +67,9 @@ pub fn confirm(
         let mut claims = Vec::new();
         for (g, group) in batch.iter().enumerate() {
             for (i, e) in group.iter().enumerate() {
-                let Some(claimant) = &e.claimant else { continue };
+                let Some(claimant) = &e.claimant else {
+                    continue;
+                };
                 if deciding[g][i] || evaluator.doubts_every_claim_of(claimant) {
                     at.push((g, i));
                     claims.push(Claim {

@@ -98,7 +98,11 @@ impl Peer {
         let mut tasks = Vec::new();
         while tasks.len() < n {
             assert!(start.elapsed() < Duration::from_secs(60), "no work in 60 s");
-            tasks.extend(self.try_lease((n - tasks.len()) as u32, 1000).await.unwrap());
+            tasks.extend(
+                self.try_lease((n - tasks.len()) as u32, 1000)
+                    .await
+                    .unwrap(),
+            );
         }
         tasks
     }

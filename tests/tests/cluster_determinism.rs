@@ -220,17 +220,17 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
         };
         let reply = hostile
             .report_all(vec![
-                    v1::TaskResult {
-                        task_id: tasks[0].task_id,
-                        result: Some(task_result::Result::Outcome(nan)),
-                        wall_seconds: f64::NAN,
-                    },
-                    v1::TaskResult {
-                        task_id: tasks[1].task_id,
-                        result: Some(task_result::Result::Outcome(garbage)),
-                        wall_seconds: 1.0,
-                    },
-                ])
+                v1::TaskResult {
+                    task_id: tasks[0].task_id,
+                    result: Some(task_result::Result::Outcome(nan)),
+                    wall_seconds: f64::NAN,
+                },
+                v1::TaskResult {
+                    task_id: tasks[1].task_id,
+                    result: Some(task_result::Result::Outcome(garbage)),
+                    wall_seconds: 1.0,
+                },
+            ])
             .await
             .unwrap();
         assert_eq!(
@@ -240,12 +240,12 @@ fn hostile_messages_get_clear_errors_and_lose_nothing() {
 
         // An oversized message is refused by the size limit before any handler runs.
         let huge = vec![v1::TaskResult {
-                task_id: tasks[0].task_id,
-                result: Some(task_result::Result::Error(
-                    "x".repeat(amorph_proto::MAX_MESSAGE_BYTES + 1),
-                )),
-                wall_seconds: 0.0,
-            }];
+            task_id: tasks[0].task_id,
+            result: Some(task_result::Result::Error(
+                "x".repeat(amorph_proto::MAX_MESSAGE_BYTES + 1),
+            )),
+            wall_seconds: 0.0,
+        }];
         // One defined status: the server refuses it from the length prefix, before reading it.
         let s = hostile.report_all(huge).await.unwrap_err();
         assert_eq!(s.code(), Code::OutOfRange, "{s:?}");

@@ -86,7 +86,9 @@ fn regression_a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
         // Silent: dropped after worker_timeout, its four leases back in the queue.
         slow.wait_until_dropped().await;
         let late = slow.evaluate(&held[0]).await;
-        let r = slow.report(held[0].task_id, task_result::Result::Outcome(late)).await
+        let r = slow
+            .report(held[0].task_id, task_result::Result::Outcome(late))
+            .await
             .unwrap();
         assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
 
@@ -96,7 +98,9 @@ fn regression_a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
             got.iter().all(|t| t.task_id != held[0].task_id),
             "a finished task was leased again"
         );
-        let s = forger.report(held[0].task_id, task_result::Result::Outcome(forged())).await
+        let s = forger
+            .report(held[0].task_id, task_result::Result::Outcome(forged()))
+            .await
             .unwrap_err();
         assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
     });
@@ -150,7 +154,11 @@ fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
     runtime().block_on(async {
         let c = client(&run.url(), None).await;
         // An empty report with no worker id names no worker, so it is not answered OK.
-        let s = c.clone().report(v1::ReportRequest::default()).await.unwrap_err();
+        let s = c
+            .clone()
+            .report(v1::ReportRequest::default())
+            .await
+            .unwrap_err();
         assert_eq!(s.code(), Code::NotFound, "{s:?}");
 
         let megabyte = format!("w1-\n\u{1b}[31m{}", "x".repeat(1 << 20));
@@ -190,7 +198,9 @@ fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
         // the batch is queued (before, the test raced the first submit and could see NOT_FOUND).
         let mut probe = Peer::register(&c, 1, "probe").await.unwrap();
         let t = probe.lease(1).await.remove(0);
-        let s = id.report(t.task_id, task_result::Result::Outcome(forged())).await
+        let s = id
+            .report(t.task_id, task_result::Result::Outcome(forged()))
+            .await
             .unwrap_err();
         assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
         assert!(s.message().contains("never leased"), "{s:?}");
@@ -324,8 +334,9 @@ fn regression_with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
                 amorph::outcome::Failure::Empty,
             ));
             lies += usize::from(liar.evaluate(task).await != failed);
-            liar.report(task.task_id, task_result::Result::Outcome(failed)).await
-            .unwrap();
+            liar.report(task.task_id, task_result::Result::Outcome(failed))
+                .await
+                .unwrap();
         }
         assert!(lies > 0, "every child really failed: nothing was a lie");
         (TestWorker::start(&run.url(), 2, None), children.len())

@@ -60,7 +60,10 @@ fn a_second_registration_of_one_token_cannot_confirm_its_own_forgery() {
         }
         for (k, task) in held.iter().enumerate() {
             let r = a
-                .report(task.task_id, task_result::Result::Outcome(swapped(&truths, k)))
+                .report(
+                    task.task_id,
+                    task_result::Result::Outcome(swapped(&truths, k)),
+                )
                 .await
                 .unwrap();
             assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
@@ -70,7 +73,10 @@ fn a_second_registration_of_one_token_cannot_confirm_its_own_forgery() {
         let start = Instant::now();
         while start.elapsed() < Duration::from_secs(4) {
             for task in b.try_lease(1024, 200).await.unwrap() {
-                assert!(!is_check(&task), "a check of a shared-token claim went to the shared token");
+                assert!(
+                    !is_check(&task),
+                    "a check of a shared-token claim went to the shared token"
+                );
                 let truth = b.evaluate(&task).await;
                 b.report(task.task_id, task_result::Result::Outcome(truth))
                     .await
@@ -132,7 +138,9 @@ fn another_workers_id_without_its_session_secret_is_refused() {
         assert!(mallory.heartbeat(&[]).await.is_ok());
     });
     assert_eq!(fingerprint(&run.join()), expected);
-    let summary = honest.join().expect("the honest worker was never quarantined");
+    let summary = honest
+        .join()
+        .expect("the honest worker was never quarantined");
     assert!(summary.evaluated > 0);
 }
 
@@ -151,7 +159,10 @@ fn several_registrations_of_one_token_cannot_fail_a_task() {
         let failed = first.lease(4).await;
         for task in &failed {
             first
-                .report(task.task_id, task_result::Result::Error("out of memory".into()))
+                .report(
+                    task.task_id,
+                    task_result::Result::Error("out of memory".into()),
+                )
                 .await
                 .unwrap();
         }
@@ -159,14 +170,18 @@ fn several_registrations_of_one_token_cannot_fail_a_task() {
             let mut other = Peer::register(&c, 24, name).await.unwrap();
             let got = other.try_lease(24, 500).await.unwrap();
             assert!(
-                got.iter().all(|t| failed.iter().all(|f| f.task_id != t.task_id)),
+                got.iter()
+                    .all(|t| failed.iter().all(|f| f.task_id != t.task_id)),
                 "a task the token failed was leased to the token again"
             );
             let ids: Vec<u64> = got.iter().map(|t| t.task_id).collect();
             other.release(&ids).await.unwrap();
             for task in &failed {
                 let s = other
-                    .report(task.task_id, task_result::Result::Error("out of memory".into()))
+                    .report(
+                        task.task_id,
+                        task_result::Result::Error("out of memory".into()),
+                    )
                     .await
                     .unwrap_err();
                 assert_eq!(s.code(), Code::FailedPrecondition, "{s:?}");
@@ -226,7 +241,10 @@ fn a_hoarder_gets_its_share_and_loses_what_it_sits_on() {
         honest.evaluated
     );
     let most = hoarder.join().unwrap();
-    assert!(most <= 256, "max_capacity bounds what the hoarder holds: {most}");
+    assert!(
+        most <= 256,
+        "max_capacity bounds what the hoarder holds: {most}"
+    );
     assert_eq!(
         amorph_coordinator::store::RunStore::peek_evaluation_count(&store).unwrap(),
         EVALUATIONS
@@ -339,9 +357,13 @@ fn a_checker_contradicting_many_claims_costs_the_coordinator_one_evaluation() {
     let expected = fingerprint(&run_locally(&reference, 2));
     let run = ClusterRun::start(&config, 0, Some(SHARED));
     let contradicted = runtime().block_on(async {
-        let mut claimant = Peer::register(&client(&run.url(), Some(&tokens[0])).await, 1024, "claimant")
-            .await
-            .unwrap();
+        let mut claimant = Peer::register(
+            &client(&run.url(), Some(&tokens[0])).await,
+            1024,
+            "claimant",
+        )
+        .await
+        .unwrap();
         let held = claimant.lease(initial).await;
         let mut liar = Peer::register(&client(&run.url(), Some(SHARED)).await, 256, "contrarian")
             .await
@@ -364,7 +386,14 @@ fn a_checker_contradicting_many_claims_costs_the_coordinator_one_evaluation() {
             let mut checks = Vec::new();
             let start = Instant::now();
             while checks.len() < initial && start.elapsed() < Duration::from_secs(20) {
-                checks.extend(liar.clone().try_lease(256, 500).await.unwrap().into_iter().filter(is_check));
+                checks.extend(
+                    liar.clone()
+                        .try_lease(256, 500)
+                        .await
+                        .unwrap()
+                        .into_iter()
+                        .filter(is_check),
+                );
             }
             checks
         };
@@ -386,7 +415,10 @@ fn a_checker_contradicting_many_claims_costs_the_coordinator_one_evaluation() {
         liar.report_all(results).await.unwrap();
         n
     });
-    assert!(contradicted >= 10, "only {contradicted} claims contradicted");
+    assert!(
+        contradicted >= 10,
+        "only {contradicted} claims contradicted"
+    );
     let third = TestWorker::start(&run.url(), 2, Some(&tokens[1]));
     let store = run.store.clone();
     assert_eq!(fingerprint(&run.join()), expected);
@@ -399,7 +431,10 @@ fn a_checker_contradicting_many_claims_costs_the_coordinator_one_evaluation() {
             |r| r.get(0),
         )
         .unwrap();
-    assert_eq!(settled, 1, "the coordinator's own re-evaluations stop at the first proven lie");
+    assert_eq!(
+        settled, 1,
+        "the coordinator's own re-evaluations stop at the first proven lie"
+    );
     let quarantined: Vec<String> = db
         .prepare("SELECT DISTINCT worker FROM quarantine")
         .unwrap()

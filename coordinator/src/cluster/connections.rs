@@ -164,7 +164,11 @@ impl ConnectionLimits {
 
     /// A call on the connection from `addr` proved `principal`: the connection stops waiting and
     /// counts against the principal. Refused when the principal holds its limit already.
-    pub fn authenticated(&self, addr: Option<SocketAddr>, principal: &Principal) -> Result<(), Status> {
+    pub fn authenticated(
+        &self,
+        addr: Option<SocketAddr>,
+        principal: &Principal,
+    ) -> Result<(), Status> {
         let Some(addr) = addr else { return Ok(()) };
         let mut t = self.lock();
         let Some((conn, owner)) = t.by_addr.get(&addr) else {
@@ -350,7 +354,10 @@ mod tests {
         let mut held = Vec::new();
         for _ in 0..MAX_PENDING_PER_ADDRESS {
             let (client, server) = pair(&listener).await;
-            held.push((client, limits.admit(server, IDLE_TIMEOUT).expect("under the limit")));
+            held.push((
+                client,
+                limits.admit(server, IDLE_TIMEOUT).expect("under the limit"),
+            ));
         }
         let (_client, server) = pair(&listener).await;
         let _newest = limits.admit(server, IDLE_TIMEOUT).expect("admitted");
@@ -360,7 +367,11 @@ mod tests {
             "the oldest waiting connection of this address made room"
         );
         held.remove(0);
-        assert_eq!(limits.open(), MAX_PENDING_PER_ADDRESS, "a closed one gives its place back");
+        assert_eq!(
+            limits.open(),
+            MAX_PENDING_PER_ADDRESS,
+            "a closed one gives its place back"
+        );
         held.pop();
 
         // Authenticated, a connection stops counting as waiting, and survives the deadline.
@@ -370,12 +381,19 @@ mod tests {
         limits.authenticated(Some(worker.addr), &alice).unwrap();
         let (_c2, server) = pair(&listener).await;
         let mut waiting = limits.admit(server, IDLE_TIMEOUT).expect("room again");
-        assert_eq!(read_error(&mut waiting).await, io::ErrorKind::TimedOut, "handshake deadline");
+        assert_eq!(
+            read_error(&mut waiting).await,
+            io::ErrorKind::TimedOut,
+            "handshake deadline"
+        );
         drop(waiting);
         tokio::time::advance(HANDSHAKE_TIMEOUT).await;
         let mut byte = [0u8; 1];
         let alive = tokio::time::timeout(Duration::from_millis(10), worker.read(&mut byte)).await;
-        assert!(alive.is_err(), "an authenticated connection is still open (its read waits)");
+        assert!(
+            alive.is_err(),
+            "an authenticated connection is still open (its read waits)"
+        );
 
         // Per principal: two connections, not three.
         let (_c3, server) = pair(&listener).await;
@@ -399,8 +417,9 @@ mod tests {
             let mut table = limits.lock();
             // Fill the waiting slots as if from many addresses.
             for i in 0..MAX_PENDING as u64 {
-                let addr: SocketAddr =
-                    format!("10.0.{}.{}:1", i / 200, i % 200 + 1).parse().unwrap();
+                let addr: SocketAddr = format!("10.0.{}.{}:1", i / 200, i % 200 + 1)
+                    .parse()
+                    .unwrap();
                 let conn = Arc::new(Conn {
                     ip: addr.ip(),
                     serial: i,
@@ -416,7 +435,10 @@ mod tests {
         };
         let (_client, server) = pair(&listener).await;
         let mut newest = limits.admit(server, IDLE_TIMEOUT).expect("admitted");
-        assert!(oldest.evicted.load(Ordering::Acquire), "the oldest was pushed out");
+        assert!(
+            oldest.evicted.load(Ordering::Acquire),
+            "the oldest was pushed out"
+        );
         limits
             .authenticated(Some(newest.addr), &Principal::Shared)
             .unwrap();

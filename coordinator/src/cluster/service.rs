@@ -124,9 +124,9 @@ impl EvaluationCoordinator for CoordinatorService {
             Some(addr) => format!("{name} @{addr}"),
             None => name,
         };
-        let registered = self
-            .queue
-            .register(&name, r.capacity, principal, trusted, Instant::now())?;
+        let registered =
+            self.queue
+                .register(&name, r.capacity, principal, trusted, Instant::now())?;
         Ok(Response::new(v1::RegisterResponse {
             worker_id: registered.worker.to_string(),
             heartbeat_interval_ms: self.queue.rules().heartbeat_interval.as_millis() as u32,

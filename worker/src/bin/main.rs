@@ -280,7 +280,11 @@ fn serve(c: Connect) -> anyhow::Result<()> {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| anyhow::anyhow!("--token-file {}: {e}", path.display()))?;
             let token = text.trim();
-            anyhow::ensure!(!token.is_empty(), "--token-file {} is empty", path.display());
+            anyhow::ensure!(
+                !token.is_empty(),
+                "--token-file {} is empty",
+                path.display()
+            );
             Some(token.to_owned())
         }
         None => c.token.filter(|t| !t.is_empty()),

@@ -276,7 +276,9 @@ impl TaskQueue {
             .filter(|t| {
                 t.task.id.is_check()
                     || (!t.errors.is_empty()
-                        && t.errors.iter().all(|(v, _)| matches!(v, Voice::Principal(_))))
+                        && t.errors
+                            .iter()
+                            .all(|(v, _)| matches!(v, Voice::Principal(_))))
             })
             .filter(|t| {
                 (t.task.id.is_check() && !t.leased_to.is_empty())

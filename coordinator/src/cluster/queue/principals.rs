@@ -25,12 +25,17 @@ fn under(q: &TaskQueue, name: &str, principal: &str, capacity: u32, now: Instant
 fn one_credential_is_one_voice_however_many_workers_it_registers() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
-    let sybils: Vec<Caller> = (0..3).map(|i| under(&q, &format!("s{i}"), "mallory", 1, t0)).collect();
+    let sybils: Vec<Caller> = (0..3)
+        .map(|i| under(&q, &format!("s{i}"), "mallory", 1, t0))
+        .collect();
     let rx = q.submit(tasks(1..=1));
     assert_eq!(ids(&q.lease(&sybils[0], 1, t0).unwrap().0), [1]);
     q.report(&sybils[0], T1, Err("no".into()), 0.0, t0).unwrap();
     for s in &sybils[1..] {
-        assert!(q.lease(s, 1, t0).unwrap().0.is_empty(), "its credential failed it");
+        assert!(
+            q.lease(s, 1, t0).unwrap().0.is_empty(),
+            "its credential failed it"
+        );
     }
     assert!(rx.try_recv().is_err(), "not failed by one voice");
     let honest = outside(&q, "honest", 1, t0).unwrap();
@@ -54,17 +59,36 @@ fn a_check_goes_to_another_credential_or_to_the_coordinator() {
         (check_task(0), Some(a1.principal.clone())),
         (check_task(1), Some(Principal::Shared)),
     ]);
-    assert!(q.lease(&a2, 2, t0).unwrap().0.iter().all(|t| t.id == check_task(1).id));
-    assert!(q.lease(&s2, 2, t0).unwrap().0.iter().all(|t| t.id == check_task(0).id));
+    assert!(
+        q.lease(&a2, 2, t0)
+            .unwrap()
+            .0
+            .iter()
+            .all(|t| t.id == check_task(1).id)
+    );
+    assert!(
+        q.lease(&s2, 2, t0)
+            .unwrap()
+            .0
+            .iter()
+            .all(|t| t.id == check_task(0).id)
+    );
     assert!(q.lease(&a1, 2, t0).unwrap().0.is_empty() && q.lease(&s1, 2, t0).unwrap().0.is_empty());
 
     let q = TaskQueue::new(rules());
     let s1 = q.register("s1", 2, Principal::Shared, false, t0).unwrap();
     let _ = q.submit_checks(vec![(check_task(0), Some(Principal::Shared))]);
     assert!(q.lease(&s1, 2, t0).unwrap().0.is_empty());
-    assert_eq!(q.orphans(t0).len(), 1, "only the claimant's principal is at work");
+    assert_eq!(
+        q.orphans(t0).len(),
+        1,
+        "only the claimant's principal is at work"
+    );
     let local = q.register("local", 1, Principal::Local, true, t0).unwrap();
-    assert_eq!(ids(&q.lease(&local, 1, t0).unwrap().0), [check_task(0).id.0]);
+    assert_eq!(
+        ids(&q.lease(&local, 1, t0).unwrap().0),
+        [check_task(0).id.0]
+    );
 }
 
 /// A worker that declares capacity 1,024 beside an honest worker waiting for one task leaves it
@@ -82,7 +106,11 @@ fn a_worker_takes_no_more_than_its_share_while_another_principal_waits() {
     assert!(q.lease(&honest, 2, t0).unwrap().0.is_empty());
     let _rx = q.submit(tasks(1..=20));
     let taken = q.lease(&hoarder, 1024, t0).unwrap().0;
-    assert_eq!(taken.len(), 16, "capped at max_capacity, and 18 left for a share of 2");
+    assert_eq!(
+        taken.len(),
+        16,
+        "capped at max_capacity, and 18 left for a share of 2"
+    );
     assert_eq!(ids(&q.lease(&honest, 2, t0).unwrap().0), [17, 18]);
 
     let q = TaskQueue::new(rules());
@@ -91,7 +119,11 @@ fn a_worker_takes_no_more_than_its_share_while_another_principal_waits() {
     assert!(q.lease(&honest, 2, t0).unwrap().0.is_empty());
     let _rx = q.submit(tasks(1..=6));
     assert_eq!(q.lease(&hoarder, 1024, t0).unwrap().0.len(), 4);
-    assert_eq!(q.lease(&honest, 2, t0).unwrap().0.len(), 2, "its share was kept");
+    assert_eq!(
+        q.lease(&honest, 2, t0).unwrap().0.len(),
+        2,
+        "its share was kept"
+    );
     // Nobody waits any more once the honest worker's call is older than the waiting window.
     let _rx = q.submit(tasks(7..=12));
     let later = t0 + Duration::from_secs(10);
@@ -125,7 +157,12 @@ fn a_hoarded_task_is_taken_over_by_a_waiting_worker_and_lapses_at_its_lifetime()
     let _rx = q.submit(tasks(9..=12));
     assert_eq!(q.lease(&hoarder, 4, now).unwrap().0.len(), 4);
     let held = [TaskId(9), TaskId(10), TaskId(11), TaskId(12)];
-    assert!(q.lease(&honest, 1, now + Duration::from_millis(150)).unwrap().0.is_empty());
+    assert!(
+        q.lease(&honest, 1, now + Duration::from_millis(150))
+            .unwrap()
+            .0
+            .is_empty()
+    );
     now += Duration::from_millis(250);
     assert_eq!(
         ids(&q.lease(&honest, 1, now).unwrap().0),
@@ -137,7 +174,11 @@ fn a_hoarded_task_is_taken_over_by_a_waiting_worker_and_lapses_at_its_lifetime()
     now += Duration::from_millis(1800);
     q.heartbeat(&hoarder, &held, now).unwrap();
     q.reap(now);
-    assert_eq!(q.stats().queued, 3, "the lifetime is over: back in the queue");
+    assert_eq!(
+        q.stats().queued,
+        3,
+        "the lifetime is over: back in the queue"
+    );
 
     // What a principal handed back waits for another principal that waits for work.
     let q = TaskQueue::new(rules());
@@ -170,7 +211,9 @@ fn registrations_are_bounded_per_credential_and_idle_ones_make_room() {
     });
     let t0 = Instant::now();
     let honest = outside(&q, "honest", 1, t0).unwrap();
-    let flood: Vec<Caller> = (0..3).map(|i| under(&q, &format!("f{i}"), "mallory", 1, t0)).collect();
+    let flood: Vec<Caller> = (0..3)
+        .map(|i| under(&q, &format!("f{i}"), "mallory", 1, t0))
+        .collect();
     let t1 = t0 + Duration::from_secs(10);
     under(&q, "f3", "mallory", 1, t1);
     assert_eq!(q.stats().evicted, 1);
@@ -179,13 +222,18 @@ fn registrations_are_bounded_per_credential_and_idle_ones_make_room() {
         QueueError::UnknownWorker(flood[0].worker),
         "the longest idle made room"
     );
-    assert!(q.heartbeat(&honest, &[], t1).is_ok(), "another credential is untouched");
+    assert!(
+        q.heartbeat(&honest, &[], t1).is_ok(),
+        "another credential is untouched"
+    );
     // All three at work (waiting for work): the fourth is refused.
     let q = TaskQueue::new(QueueRules {
         max_workers_per_credential: 3,
         ..rules()
     });
-    let busy: Vec<Caller> = (0..3).map(|i| under(&q, &format!("b{i}"), "mallory", 1, t0)).collect();
+    let busy: Vec<Caller> = (0..3)
+        .map(|i| under(&q, &format!("b{i}"), "mallory", 1, t0))
+        .collect();
     for b in &busy {
         q.lease(b, 1, t0).unwrap();
     }
@@ -206,7 +254,10 @@ fn a_lie_quarantines_its_credential_and_under_the_shared_token_only_the_liar() {
     let m2 = under(&q, "m2", "mallory", 1, t0);
     let honest = outside(&q, "honest", 1, t0).unwrap();
     q.quarantine(&claimant(&m1));
-    assert_eq!(q.lease(&m2, 1, t0).unwrap_err(), QueueError::Quarantined(m2.worker));
+    assert_eq!(
+        q.lease(&m2, 1, t0).unwrap_err(),
+        QueueError::Quarantined(m2.worker)
+    );
     assert!(matches!(
         q.register("m3", 1, Principal::Credential("mallory".into()), false, t0),
         Err(QueueError::Quarantined(_))
@@ -216,7 +267,13 @@ fn a_lie_quarantines_its_credential_and_under_the_shared_token_only_the_liar() {
     let s1 = q.register("s1", 1, Principal::Shared, false, t0).unwrap();
     let s2 = q.register("s2", 1, Principal::Shared, false, t0).unwrap();
     q.quarantine(&claimant(&s1));
-    assert_eq!(q.lease(&s1, 1, t0).unwrap_err(), QueueError::Quarantined(s1.worker));
-    assert!(q.lease(&s2, 1, t0).is_ok(), "an honest holder of the shared token works on");
+    assert_eq!(
+        q.lease(&s1, 1, t0).unwrap_err(),
+        QueueError::Quarantined(s1.worker)
+    );
+    assert!(
+        q.lease(&s2, 1, t0).is_ok(),
+        "an honest holder of the shared token works on"
+    );
     assert!(q.register("s3", 1, Principal::Shared, false, t0).is_ok());
 }

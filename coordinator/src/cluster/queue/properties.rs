@@ -269,7 +269,13 @@ fn run(ops: Vec<Op>, max_attempts: u32) -> Result<(), TestCaseError> {
                         prop_assert_eq!(q.lease(&stolen, 4, now).err(), refused.clone());
                         prop_assert_eq!(q.heartbeat(&stolen, &[], now).err(), refused.clone());
                         prop_assert_eq!(q.release(&stolen, &named(0xff)).err(), refused.clone());
-                        let report = q.report(&stolen, TaskId(1), Ok(Outcome::failed(Failure::Empty)), 0.0, now);
+                        let report = q.report(
+                            &stolen,
+                            TaskId(1),
+                            Ok(Outcome::failed(Failure::Empty)),
+                            0.0,
+                            now,
+                        );
                         prop_assert_eq!(report.err(), refused);
                     }
                 }

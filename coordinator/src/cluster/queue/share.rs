@@ -87,7 +87,10 @@ impl State {
             return room;
         }
         let open = self.queued.len() as u64 + principals.values().map(|p| p.0).sum::<u64>();
-        let demands: Vec<u64> = principals.values().map(|(held, wants)| held + wants).collect();
+        let demands: Vec<u64> = principals
+            .values()
+            .map(|(held, wants)| held + wants)
+            .collect();
         let alloc = max_min(open, &demands);
         let held = principals[&(false, &me.principal)].0;
         alloc[0].saturating_sub(held).min(u64::from(room)) as u32
@@ -142,8 +145,9 @@ fn median(samples: &VecDeque<Duration>) -> Option<Duration> {
 
 fn lifetime(samples: &VecDeque<Duration>, rules: &QueueRules) -> Duration {
     match median(samples) {
-        Some(m) if samples.len() >= MIN_SAMPLES => (m * MEDIANS_PER_LIFETIME)
-            .clamp(rules.lease.min(rules.max_lease), rules.max_lease),
+        Some(m) if samples.len() >= MIN_SAMPLES => {
+            (m * MEDIANS_PER_LIFETIME).clamp(rules.lease.min(rules.max_lease), rules.max_lease)
+        }
         _ => rules.max_lease,
     }
 }
@@ -171,11 +175,21 @@ mod tests {
             ..QueueRules::default()
         };
         let ms = |v: &[u64]| v.iter().map(|&m| Duration::from_millis(m)).collect();
-        assert_eq!(lifetime(&ms(&[5000; 7]), &rules), rules.max_lease, "too few");
+        assert_eq!(
+            lifetime(&ms(&[5000; 7]), &rules),
+            rules.max_lease,
+            "too few"
+        );
         assert_eq!(lifetime(&ms(&[40; 8]), &rules), rules.lease, "floor");
         // Median 5 s, which three slow outliers do not move: 40 s.
-        let mixed = ms(&[5000, 5000, 5000, 5000, 5000, 9_000_000, 9_000_000, 9_000_000]);
+        let mixed = ms(&[
+            5000, 5000, 5000, 5000, 5000, 9_000_000, 9_000_000, 9_000_000,
+        ]);
         assert_eq!(lifetime(&mixed, &rules), Duration::from_secs(40));
-        assert_eq!(lifetime(&ms(&[200_000; 8]), &rules), rules.max_lease, "ceiling");
+        assert_eq!(
+            lifetime(&ms(&[200_000; 8]), &rules),
+            rules.max_lease,
+            "ceiling"
+        );
     }
 }

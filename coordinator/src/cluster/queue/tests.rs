@@ -33,7 +33,13 @@ pub(super) fn outside(
     capacity: u32,
     now: Instant,
 ) -> Result<Caller, QueueError> {
-    q.register(name, capacity, Principal::Credential(name.into()), false, now)
+    q.register(
+        name,
+        capacity,
+        Principal::Credential(name.into()),
+        false,
+        now,
+    )
 }
 
 pub(super) fn claimant(c: &Caller) -> Claimant {
@@ -289,7 +295,10 @@ fn reports_for_unknown_or_never_leased_tasks_are_refused() {
             q.report(&stolen, T1, ok(), 0.0, t0),
             Err(QueueError::BadSession(a.worker))
         );
-        assert_eq!(q.release(&stolen, &[T1]), Err(QueueError::BadSession(a.worker)));
+        assert_eq!(
+            q.release(&stolen, &[T1]),
+            Err(QueueError::BadSession(a.worker))
+        );
     }
     // Nothing above disturbed the legitimate lease.
     assert_eq!(
@@ -415,7 +424,10 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
     let rx = q.submit(tasks(1..=1));
     q.lease(&claimant, 1, t0).unwrap();
     q.report(&claimant, T1, ok(), 0.1, t0).unwrap();
-    assert_eq!(rx.try_recv().unwrap().origin, Origin::Claim(super::tests::claimant(&claimant)));
+    assert_eq!(
+        rx.try_recv().unwrap().origin,
+        Origin::Claim(super::tests::claimant(&claimant))
+    );
 
     let rx = q.submit_checks(vec![(check_task(0), Some(claimant.principal.clone()))]);
     assert!(
@@ -425,10 +437,7 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
     let orphans = q.orphans(t0);
     assert_eq!(orphans.len(), 1, "no other worker: the coordinator's");
     let other = q.register("other", 1, Principal::Local, true, t0).unwrap();
-    assert!(
-        q.orphans(t0).is_empty(),
-        "another worker may take it now"
-    );
+    assert!(q.orphans(t0).is_empty(), "another worker may take it now");
     let later = t0 + rules().lease;
     assert_eq!(
         q.orphans(later).len(),
@@ -438,11 +447,7 @@ fn a_check_is_kept_from_its_claimant_and_orphaned_when_no_one_else_may_take_it()
     q.heartbeat(&other, &[], later).unwrap();
     assert_eq!(q.orphans(later).len(), 1, "a heartbeat is not asking");
     q.lease(&claimant, 1, later).unwrap();
-    assert_eq!(
-        q.orphans(later).len(),
-        1,
-        "nor is the claimant's asking"
-    );
+    assert_eq!(q.orphans(later).len(), 1, "nor is the claimant's asking");
     assert!(q.lease(&other, 0, later).unwrap().0.is_empty());
     assert_eq!(
         q.orphans(later).len(),
@@ -528,7 +533,10 @@ fn a_quarantined_worker_loses_its_leases_and_is_refused() {
         "back in the queue"
     );
     q.report(&honest, T1, ok(), 0.1, t0).unwrap();
-    assert_eq!(rx.try_recv().unwrap().origin, Origin::Claim(claimant(&honest)));
+    assert_eq!(
+        rx.try_recv().unwrap().origin,
+        Origin::Claim(claimant(&honest))
+    );
     assert!(q.is_quarantined(&claimant(&liar)) && !q.is_quarantined(&claimant(&honest)));
 }
 
@@ -551,10 +559,7 @@ fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
         "trusted: never shut out"
     );
     q.reap(t0 + rules().worker_timeout);
-    assert!(
-        outside(&q, "after", 1, t0 + rules().worker_timeout)
-            .is_ok()
-    );
+    assert!(outside(&q, "after", 1, t0 + rules().worker_timeout).is_ok());
 }
 
 #[test]

@@ -81,7 +81,12 @@ impl TaskQueue {
     }
 
     /// Below the per-credential limit, or one idle registration of `principal` dropped.
-    fn make_room(&self, s: &mut State, principal: &Principal, now: Instant) -> Result<(), QueueError> {
+    fn make_room(
+        &self,
+        s: &mut State,
+        principal: &Principal,
+        now: Instant,
+    ) -> Result<(), QueueError> {
         let limit = self.rules.max_workers_per_credential;
         let mine = || s.workers.iter().filter(|(_, w)| w.principal == *principal);
         if mine().count() < limit {
@@ -208,9 +213,9 @@ impl TaskQueue {
                     ..
                 } if now.saturating_duration_since(granted) > after
                     && t.may_take(worker, me)
-                    && s.workers.get(&holder).is_some_and(|h| {
-                        !h.trusted && h.principal != me.principal
-                    }) =>
+                    && s.workers
+                        .get(&holder)
+                        .is_some_and(|h| !h.trusted && h.principal != me.principal) =>
                 {
                     Some((granted, id))
                 }
