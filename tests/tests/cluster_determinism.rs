@@ -91,7 +91,7 @@ fn a_worker_that_connects_late_joins_the_run() {
 }
 
 #[test]
-fn regression_a_worker_between_two_calls_hears_that_the_run_finished() {
+fn a_worker_between_two_calls_hears_that_the_run_finished() {
     // CI once saw a late worker, between two calls when the run ended, find the port closed
     // and retry for 60 s before failing. A worker that heartbeats slower than the run's last
     // moments must still be answered `run_finished`, not a closed connection.

@@ -24,7 +24,7 @@ fn reference() -> String {
 /// again on every resume; a fitness better than the design's own profile would change the result.
 /// Both are refused, the worker's task goes to another worker, and the run ends as a clean run.
 #[test]
-fn regression_an_outcome_the_scene_cannot_produce_is_refused() {
+fn an_outcome_the_scene_cannot_produce_is_refused() {
     let expected = reference();
     let config = small_beam_config(&scratch_dir("hostile-implausible"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
@@ -75,7 +75,7 @@ fn regression_an_outcome_the_scene_cannot_produce_is_refused() {
 /// (accepted). The late report is final: the task is not leased again, so a second, forged report
 /// cannot replace the first (here it would take the best RMS from 1.014 % to 0.000 %).
 #[test]
-fn regression_a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
+fn a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
     let expected = reference();
     let config = small_beam_config(&scratch_dir("hostile-late"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
@@ -113,7 +113,7 @@ fn regression_a_late_report_is_final_and_a_forged_second_one_changes_nothing() {
 /// nor replace the design's real outcome: a task fails only after `max_attempts` different
 /// workers; one worker answers a task once.
 #[test]
-fn regression_one_worker_cannot_fail_a_task_by_repeating_errors() {
+fn one_worker_cannot_fail_a_task_by_repeating_errors() {
     let expected = reference();
     let config = small_beam_config(&scratch_dir("hostile-errors"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
@@ -148,7 +148,7 @@ fn regression_one_worker_cannot_fail_a_task_by_repeating_errors() {
 /// report with no worker id, a heartbeat of another protocol version and a report for a task of an
 /// earlier batch never leased to the reporter each get their status.
 #[test]
-fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
+fn malformed_calls_get_their_status_and_echo_nothing_raw() {
     let config = small_beam_config(&scratch_dir("hostile-malformed"), 60, SEED);
     let run = ClusterRun::start(&config, 0, None);
     runtime().block_on(async {
@@ -214,7 +214,7 @@ fn regression_malformed_calls_get_their_status_and_echo_nothing_raw() {
 /// A failed bind leaves no `run.sqlite` behind, so a retry needs neither `--resume` nor
 /// `--fresh`, and the bind error is printed once.
 #[test]
-fn regression_a_failed_bind_leaves_no_run_store_and_says_why_once() {
+fn a_failed_bind_leaves_no_run_store_and_says_why_once() {
     use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
     use amorph_coordinator::store::RunStore;
 
@@ -253,7 +253,7 @@ fn regression_a_failed_bind_leaves_no_run_store_and_says_why_once() {
 /// coordinator's own evaluation, the liar is quarantined (its calls refused with PERMISSION_DENIED,
 /// a row in the run store) and the run ends as a clean run.
 #[test]
-fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined() {
+fn a_plausible_forged_outcome_is_checked_and_its_worker_quarantined() {
     let expected = reference();
     let config = small_beam_config(&scratch_dir("hostile-plausible"), EVALUATIONS, SEED);
     let run = ClusterRun::start(&config, 0, None);
@@ -309,7 +309,7 @@ fn regression_a_plausible_forged_outcome_is_checked_and_its_worker_quarantined()
 /// checked anyway) and then calls every child it is given a failure is caught, quarantined, and the
 /// run ends as a clean run.
 #[test]
-fn regression_with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
+fn with_verify_all_a_worse_outcome_for_a_losing_child_is_caught() {
     let expected = reference();
     let mut config = small_beam_config(&scratch_dir("hostile-verify-all"), EVALUATIONS, SEED);
     config.cluster.verify = amorph_coordinator::cluster::Verify::All;

@@ -132,7 +132,7 @@ mod tests {
     /// "data did not match any variant of untagged enum GenomeFile" or "expected value at line 1
     /// column 27".
     #[test]
-    fn regression_a_bad_genome_file_names_the_field() {
+    fn a_bad_genome_file_names_the_field() {
         let dir = std::env::temp_dir().join(format!("amorph-genome-file-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let point =

@@ -314,7 +314,7 @@ mod tests {
     /// worker pool; a lease of `u64::MAX` ms, which would panic added to an `Instant`) are each
     /// refused in one line naming the key.
     #[test]
-    fn regression_sizes_and_durations_out_of_bounds_name_their_key() {
+    fn sizes_and_durations_out_of_bounds_name_their_key() {
         type Edit = fn(&mut ClusterSection);
         let cases: [(&str, Edit); 11] = [
             ("cluster.max_capacity = 0", |c| c.max_capacity = 0),

@@ -48,7 +48,7 @@ fn resume_reads_the_stored_config_with_todays_defaults() {
 /// A corrupt population row (a negative or out-of-range island, a negative task id, as an edited
 /// store may hold) is an error naming the table and the row, not a panic.
 #[test]
-fn regression_a_corrupt_population_row_is_an_error_naming_it() {
+fn a_corrupt_population_row_is_an_error_naming_it() {
     let dir = std::env::temp_dir().join(format!("amorph-store-corrupt-{}", std::process::id()));
     let store = RunStore::create(&locomotion_config(&dir, 1), true).unwrap();
     let insert = |island: i64, task: i64| {

@@ -102,7 +102,7 @@ mod tests {
     /// with the voxel count and refuses it under a budget smaller than what it would ask for,
     /// while the paper's beam passes a small one.
     #[test]
-    fn regression_an_evaluation_over_budget_is_refused_before_it_starts() {
+    fn an_evaluation_over_budget_is_refused_before_it_starts() {
         let beam: Scene = toml::from_str("kind = \"beam\"\ntarget = \"straight\"").unwrap();
         let huge = GridDims::new(1024, 1024, 8);
         assert!(

@@ -15,10 +15,10 @@
 //!   `[lease, max_lease]`: a worker that names its leases in every heartbeat and never reports
 //!   keeps them for a few evaluations' time, not for `max_lease`.
 
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::time::{Duration, Instant};
 
-use super::task::TaskState;
+use super::task::{TaskState, Voice};
 use super::{QueueRules, State, WorkerState};
 use crate::ids::WorkerId;
 use crate::principal::Principal;
@@ -64,7 +64,9 @@ impl State {
         // Per principal: tasks held, and tasks its workers wait for. The caller's principal goes
         // first, so a tie is broken in favour of the worker that is asking.
         let mut principals: BTreeMap<(bool, &Principal), (u64, u64)> = BTreeMap::new();
-        let mut others_wait = false;
+        // Waiting workers by voice (what they may take depends on nothing else), so the queue
+        // is scanned once per voice, not once per worker: (slots wanted, one of them).
+        let mut waiting: HashMap<Voice, (u64, WorkerId)> = HashMap::new();
         for (&id, w) in &self.workers {
             let entry = principals
                 .entry((w.principal != me.principal, &w.principal))
@@ -73,15 +75,23 @@ impl State {
             if id == worker {
                 entry.1 += u64::from(room);
             } else if w.waiting(now) {
-                let wanted = self
-                    .queued
-                    .iter()
-                    .filter(|t| self.tasks[t].may_take(id, w))
-                    .take(w.wants as usize)
-                    .count() as u64;
-                entry.1 += wanted;
-                others_wait |= wanted > 0 && w.principal != me.principal;
+                waiting.entry(w.voice(id)).or_insert((0, id)).0 += u64::from(w.wants);
             }
+        }
+        let mut others_wait = false;
+        for (wants, id) in waiting.into_values() {
+            let w = &self.workers[&id];
+            let wanted = self
+                .queued
+                .iter()
+                .filter(|t| self.tasks[t].may_take(id, w))
+                .take(wants as usize)
+                .count() as u64;
+            principals
+                .get_mut(&(w.principal != me.principal, &w.principal))
+                .expect("counted above")
+                .1 += wanted;
+            others_wait |= wanted > 0 && w.principal != me.principal;
         }
         if !others_wait {
             return room;

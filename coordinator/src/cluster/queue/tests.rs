@@ -108,7 +108,7 @@ fn an_expired_lease_is_redispatched_and_the_late_report_counts_once() {
 /// A late report for a re-queued task is final: the task leaves the queue, so it is never leased
 /// again and no second (possibly forged) outcome can replace the first.
 #[test]
-fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
+fn a_late_report_after_expiry_is_final_and_never_leased_again() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     let a = outside(&q, "a", 1, t0).unwrap();
@@ -138,7 +138,7 @@ fn regression_a_late_report_after_expiry_is_final_and_never_leased_again() {
 /// Errors repeated by one worker for one task (as three in one `Report`) count once: one worker
 /// cannot fail a task alone, and the task is not leased again to the worker that failed it.
 #[test]
-fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
+fn errors_repeated_by_one_worker_do_not_fail_a_task() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     let a = outside(&q, "a", 1, t0).unwrap();
@@ -176,7 +176,7 @@ fn regression_errors_repeated_by_one_worker_do_not_fail_a_task() {
 /// A worker that was leased a task once cannot take it from its current holder by reporting an
 /// error for it.
 #[test]
-fn regression_an_error_from_a_former_holder_leaves_the_current_lease_alone() {
+fn an_error_from_a_former_holder_leaves_the_current_lease_alone() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     let a = outside(&q, "a", 1, t0).unwrap();
@@ -351,7 +351,7 @@ fn released_tasks_go_back_to_the_front() {
 /// A report for a task of an earlier batch that was never leased to the reporter is refused as a
 /// task the worker never had, not answered as a duplicate.
 #[test]
-fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
+fn an_earlier_batch_tells_duplicates_from_never_leased_reports() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     let a = outside(&q, "a", 4, t0).unwrap();
@@ -381,7 +381,7 @@ fn regression_an_earlier_batch_tells_duplicates_from_never_leased_reports() {
 /// its holder names it in a heartbeat, so a worker cannot hoard tasks; a late outcome from the
 /// hoarder would still count if it came first.
 #[test]
-fn regression_heartbeats_cannot_keep_a_lease_past_its_lifetime() {
+fn heartbeats_cannot_keep_a_lease_past_its_lifetime() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     let hoarder = outside(&q, "hoarder", 2, t0).unwrap();
@@ -544,7 +544,7 @@ fn a_quarantined_worker_loses_its_leases_and_is_refused() {
 /// MAX_WORKERS outside workers are registered at once; the coordinator's own trusted workers are
 /// never shut out, and room comes back as silent workers are dropped.
 #[test]
-fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
+fn registrations_are_bounded_and_free_again_when_silent_ones_go() {
     let q = TaskQueue::new(rules());
     let t0 = Instant::now();
     for i in 0..MAX_WORKERS {
@@ -563,7 +563,7 @@ fn regression_registrations_are_bounded_and_free_again_when_silent_ones_go() {
 }
 
 #[test]
-fn regression_the_server_closes_only_when_every_worker_has_heard_the_run_finished() {
+fn the_server_closes_only_when_every_worker_has_heard_the_run_finished() {
     // A worker between two calls when the run ends must not find the port closed, retry until it
     // gives up and exit with an error: the run stays reachable until it has been told.
     let q = TaskQueue::new(rules());
