@@ -45,14 +45,40 @@ fn is_check(task: &v1::Task) -> bool {
 /// makes every check itself, A is caught and quarantined, and the run ends as a clean run.
 #[test]
 fn a_second_registration_of_one_token_cannot_confirm_its_own_forgery() {
+    sybil("identity-sybil", 1, false);
+}
+
+/// The same with four confirming registrations.
+#[test]
+fn four_registrations_of_one_token_cannot_confirm_its_forgery() {
+    sybil("identity-sybil-four", 4, false);
+}
+
+/// The same with `verify = "all"`, where every outside outcome is checked.
+#[test]
+fn with_every_claim_checked_one_token_still_cannot_confirm_its_forgery() {
+    sybil("identity-sybil-all", 1, true);
+}
+
+fn sybil(name: &str, confirmers: usize, verify_all: bool) {
     let expected = clean_small_beam(120, SEED);
-    let dir = scratch_dir("identity-sybil");
-    let (config, tokens) = guarded(&dir, 120, &["honest"]);
+    let dir = scratch_dir(name);
+    let (mut config, tokens) = guarded(&dir, 120, &["honest"]);
+    if verify_all {
+        config.cluster.verify = amorph_coordinator::cluster::Verify::All;
+    }
     let run = ClusterRun::start(&config, 0, Some(SHARED));
     let honest = runtime().block_on(async {
         let c = client(&run.url(), Some(SHARED)).await;
         let mut a = Peer::register(&c, 12, "sybil-a").await.unwrap();
-        let mut b = Peer::register(&c, 1024, "sybil-b").await.unwrap();
+        let mut confirmers_ = Vec::new();
+        for i in 0..confirmers {
+            confirmers_.push(
+                Peer::register(&c, 1024, &format!("sybil-b{i}"))
+                    .await
+                    .unwrap(),
+            );
+        }
         let held = a.lease(12).await;
         let mut truths = Vec::new();
         for task in &held {
@@ -72,15 +98,17 @@ fn a_second_registration_of_one_token_cannot_confirm_its_own_forgery() {
         // are checked; meanwhile it asks for everything, checks included.
         let start = Instant::now();
         while start.elapsed() < Duration::from_secs(4) {
-            for task in b.try_lease(1024, 200).await.unwrap() {
-                assert!(
-                    !is_check(&task),
-                    "a check of a shared-token claim went to the shared token"
-                );
-                let truth = b.evaluate(&task).await;
-                b.report(task.task_id, task_result::Result::Outcome(truth))
-                    .await
-                    .unwrap();
+            for b in &mut confirmers_ {
+                for task in b.try_lease(1024, 100).await.unwrap() {
+                    assert!(
+                        !is_check(&task),
+                        "a check of a shared-token claim went to the shared token"
+                    );
+                    let truth = b.evaluate(&task).await;
+                    b.report(task.task_id, task_result::Result::Outcome(truth))
+                        .await
+                        .unwrap();
+                }
             }
         }
         match a.try_lease(1, 0).await {

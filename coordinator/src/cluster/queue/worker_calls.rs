@@ -203,23 +203,24 @@ impl TaskQueue {
         }
         let me = &s.workers[&worker];
         let after = s.backup_after(&self.rules);
+        // Only what other principals' outside workers hold: the common case, one principal or
+        // local workers alone, looks at no task.
         let mut held: Vec<(Instant, TaskId)> = s
-            .tasks
-            .iter()
-            .filter_map(|(&id, t)| match t.phase {
-                Phase::Leased {
-                    worker: holder,
-                    granted,
-                    ..
-                } if now.saturating_duration_since(granted) > after
-                    && t.may_take(worker, me)
-                    && s.workers
-                        .get(&holder)
-                        .is_some_and(|h| !h.trusted && h.principal != me.principal) =>
-                {
-                    Some((granted, id))
+            .workers
+            .values()
+            .filter(|h| !h.trusted && h.principal != me.principal)
+            .flat_map(|h| h.leased.iter())
+            .filter_map(|id| {
+                let t = &s.tasks[id];
+                match t.phase {
+                    Phase::Leased { granted, .. }
+                        if now.saturating_duration_since(granted) > after
+                            && t.may_take(worker, me) =>
+                    {
+                        Some((granted, *id))
+                    }
+                    _ => None,
                 }
-                _ => None,
             })
             .collect();
         held.sort_unstable();
