@@ -61,6 +61,14 @@ impl State {
     /// for and may take (a check it may not make, a task it failed, are no demand of its).
     pub(super) fn allowance(&self, worker: WorkerId, room: u32, now: Instant) -> u32 {
         let me = &self.workers[&worker];
+        // The common case, one principal (or local workers alone) at work, costs one pass.
+        if !self
+            .workers
+            .values()
+            .any(|w| w.principal != me.principal && w.waiting(now))
+        {
+            return room;
+        }
         // Per principal: tasks held, and tasks its workers wait for. The caller's principal goes
         // first, so a tie is broken in favour of the worker that is asking.
         let mut principals: BTreeMap<(bool, &Principal), (u64, u64)> = BTreeMap::new();
