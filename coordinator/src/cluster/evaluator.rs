@@ -12,7 +12,7 @@ use tracing::{info, warn};
 
 use super::queue::TaskQueue;
 use crate::evaluator::{
-    Claim, Claimant, Completion, Evaluator, EvaluatorError, Origin, Task, Verdict,
+    Claim, Claimant, Completion, Evaluator, EvaluatorError, LocalEvaluator, Origin, Task, Verdict,
 };
 use crate::ids::TaskId;
 
@@ -20,9 +20,10 @@ use crate::ids::TaskId;
 pub struct ClusterEvaluator {
     queue: Arc<TaskQueue>,
     shutdown: Arc<AtomicBool>,
-    /// The run's scene, for the evaluations the coordinator makes itself: a task no worker at
-    /// work may take, and the tie-break when a check disagrees with a claim.
+    /// The run's scene, for the tie-break when a check disagrees with a claim.
     scene: Arc<Scene>,
+    /// This process's cores, for the tasks no worker at work may take (`TaskQueue::orphans`).
+    here: LocalEvaluator,
     next_check: u64,
     /// Added to the search's task ids on the queue. The queue needs ids that increase from batch
     /// to batch (a late result for an earlier batch must never pass for one of the current
@@ -55,6 +56,7 @@ impl ClusterEvaluator {
         Self {
             queue,
             shutdown,
+            here: LocalEvaluator::new(scene.clone(), 0),
             scene,
             next_check: TaskId::FIRST_CHECK,
             queue_offset: 0,
@@ -101,10 +103,13 @@ impl ClusterEvaluator {
                             tasks.len()
                         )));
                     }
-                    let orphans = self.queue.orphans(Instant::now());
+                    let orphans: Vec<Task> = (self.queue.orphans(Instant::now()).iter())
+                        .map(|t| Task::clone(t))
+                        .collect();
                     self.stats.by_coordinator += orphans.len() as u64;
-                    for (task, outcome, seconds) in self.evaluate_here(&orphans) {
-                        self.queue.finish_here(task, outcome, seconds);
+                    for done in self.here.evaluate(&orphans, &|_, _| {})? {
+                        let id = orphans[done.slot].id;
+                        self.queue.finish_here(id, done.outcome, done.wall_seconds);
                     }
                 }
                 Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
@@ -116,39 +121,6 @@ impl ClusterEvaluator {
             .into_iter()
             .map(|c| c.expect("counted"))
             .collect())
-    }
-
-    /// Evaluates `tasks` on this process's cores, all at once.
-    fn evaluate_here(&self, tasks: &[Arc<Task>]) -> Vec<(TaskId, Outcome, f64)> {
-        let threads = std::thread::available_parallelism()
-            .map_or(1, |n| n.get())
-            .min(tasks.len());
-        if threads == 0 {
-            return Vec::new();
-        }
-        let scene = &self.scene;
-        let per = tasks.len().div_ceil(threads);
-        std::thread::scope(|scope| {
-            let handles: Vec<_> = tasks
-                .chunks(per)
-                .map(|chunk| {
-                    scope.spawn(move || {
-                        chunk
-                            .iter()
-                            .map(|t| {
-                                let started = Instant::now();
-                                let outcome = scene.evaluate(&t.genome, t.dims);
-                                (t.id, outcome, started.elapsed().as_secs_f64())
-                            })
-                            .collect::<Vec<_>>()
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .flat_map(|h| h.join().expect("evaluations catch their own panics"))
-                .collect()
-        })
     }
 
     /// The coordinator's own evaluation of a claim both of whose witnesses are unproven: whoever

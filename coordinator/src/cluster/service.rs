@@ -175,10 +175,11 @@ impl EvaluationCoordinator for CoordinatorService {
         let caller = caller(principal, &r.worker_id, &r.session)?;
         let worker = caller.worker;
         status::list_length("results", r.results.len())?;
-        let mut dispositions = Vec::with_capacity(r.results.len());
-        // Every valid result is recorded even if another in the same call is refused; the first
-        // refusal is returned after, so the worker learns of it.
-        let mut refusal: Option<Status> = None;
+        // Every result is converted and checked first, then recorded in one call to the queue,
+        // which proves the caller once. Every valid result is recorded even if another in the
+        // same call is refused; the first refusal is returned after, so the worker learns of it.
+        let mut malformed = Vec::with_capacity(r.results.len());
+        let mut results = Vec::with_capacity(r.results.len());
         for result in r.results {
             let task = TaskId(result.task_id);
             let wall = if result.wall_seconds.is_finite() && result.wall_seconds >= 0.0 {
@@ -186,9 +187,9 @@ impl EvaluationCoordinator for CoordinatorService {
             } else {
                 0.0
             };
-            let (outcome, malformed) = match result.result {
+            let (outcome, bad) = match result.result {
                 Some(task_result::Result::Outcome(o)) => match convert::outcome_from_wire(&o)
-                    .and_then(|outcome| self.checked(TaskId(result.task_id), outcome))
+                    .and_then(|outcome| self.checked(task, outcome))
                 {
                     Ok(outcome) => (Ok(outcome), false),
                     Err(e) => (
@@ -204,14 +205,19 @@ impl EvaluationCoordinator for CoordinatorService {
                 }
                 None => (Err("malformed report: result is missing".into()), true),
             };
-            if malformed {
+            if bad {
                 warn!(%worker, %task, "malformed outcome noted as the worker's error");
             }
-            match self
-                .queue
-                .report(&caller, task, outcome, wall, Instant::now())
-            {
-                Ok(d) => dispositions.push(match (d, malformed) {
+            malformed.push(bad);
+            results.push((task, outcome, wall));
+        }
+        let tasks: Vec<TaskId> = results.iter().map(|(task, _, _)| *task).collect();
+        let recorded = self.queue.report_all(&caller, results, Instant::now())?;
+        let mut dispositions = Vec::with_capacity(recorded.len());
+        let mut refusal: Option<Status> = None;
+        for ((d, bad), task) in recorded.into_iter().zip(malformed).zip(tasks) {
+            match d {
+                Ok(d) => dispositions.push(match (d, bad) {
                     (Disposition::Accepted, _) => v1::ReportDisposition::Accepted,
                     (Disposition::Duplicate, _) => v1::ReportDisposition::Duplicate,
                     (Disposition::ErrorNoted, true) => v1::ReportDisposition::Rejected,

@@ -42,7 +42,7 @@ mod properties;
 #[cfg(test)]
 mod tests;
 
-use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
@@ -111,7 +111,7 @@ struct State {
     /// Credentials caught the same way: every call and registration under them is refused.
     quarantined_principals: HashSet<Principal>,
     /// Grant-to-report times of the last accepted reports, for the lease lifetime.
-    lease_times: VecDeque<std::time::Duration>,
+    lease_times: share::LeaseTimes,
     completions: Option<Sender<Completion>>,
     noted_errors: Vec<NotedError>,
     run_finished: bool,
@@ -148,7 +148,7 @@ impl TaskQueue {
                 highest_task: [None, None],
                 quarantined: HashSet::new(),
                 quarantined_principals: HashSet::new(),
-                lease_times: VecDeque::with_capacity(share::SAMPLES),
+                lease_times: share::LeaseTimes::default(),
                 completions: None,
                 noted_errors: Vec::new(),
                 run_finished: false,

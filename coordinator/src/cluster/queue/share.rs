@@ -24,7 +24,7 @@ use crate::ids::WorkerId;
 use crate::principal::Principal;
 
 /// Reports the lease lifetime is measured over.
-pub(super) const SAMPLES: usize = 64;
+const SAMPLES: usize = 64;
 /// Reports measured before the lifetime follows them (until then: `max_lease`).
 const MIN_SAMPLES: usize = 8;
 /// Lifetime in medians of the measured evaluation time.
@@ -132,41 +132,49 @@ impl State {
 
     /// How long a lease granted now may live, heartbeats or not.
     pub(super) fn lease_lifetime(&self, rules: &QueueRules) -> Duration {
-        lifetime(&self.lease_times, rules)
+        lifetime(self.lease_times.median, rules)
     }
 
     /// How long another principal's outside worker may hold a task before a waiting worker takes
     /// it over: twice the median measured evaluation, once measured (until then, `lease`).
     pub(super) fn backup_after(&self, rules: &QueueRules) -> Duration {
-        match median(&self.lease_times) {
-            Some(m) if self.lease_times.len() >= MIN_SAMPLES => {
-                (m * 2).max(rules.heartbeat_interval)
-            }
-            _ => rules.lease,
+        match self.lease_times.median {
+            Some(m) => (m * 2).max(rules.heartbeat_interval),
+            None => rules.lease,
         }
     }
+}
 
+/// Grant-to-report times of the last [`SAMPLES`] accepted reports and their median, kept as they
+/// come (once per report) so that granting a lease reads it without sorting.
+#[derive(Debug, Default)]
+pub(super) struct LeaseTimes {
+    samples: VecDeque<Duration>,
+    /// Set once [`MIN_SAMPLES`] are in.
+    median: Option<Duration>,
+}
+
+impl LeaseTimes {
     pub(super) fn measure(&mut self, granted: Instant, now: Instant) {
-        if self.lease_times.len() == SAMPLES {
-            self.lease_times.pop_front();
+        if self.samples.len() == SAMPLES {
+            self.samples.pop_front();
         }
-        self.lease_times
+        self.samples
             .push_back(now.saturating_duration_since(granted));
+        if self.samples.len() >= MIN_SAMPLES {
+            let mut sorted: Vec<Duration> = self.samples.iter().copied().collect();
+            sorted.sort_unstable();
+            self.median = Some(sorted[sorted.len() / 2]);
+        }
     }
 }
 
-fn median(samples: &VecDeque<Duration>) -> Option<Duration> {
-    let mut sorted: Vec<Duration> = samples.iter().copied().collect();
-    sorted.sort_unstable();
-    sorted.get(sorted.len() / 2).copied()
-}
-
-fn lifetime(samples: &VecDeque<Duration>, rules: &QueueRules) -> Duration {
-    match median(samples) {
-        Some(m) if samples.len() >= MIN_SAMPLES => {
+fn lifetime(median: Option<Duration>, rules: &QueueRules) -> Duration {
+    match median {
+        Some(m) => {
             (m * MEDIANS_PER_LIFETIME).clamp(rules.lease.min(rules.max_lease), rules.max_lease)
         }
-        _ => rules.max_lease,
+        None => rules.max_lease,
     }
 }
 
@@ -192,20 +200,23 @@ mod tests {
             max_lease: Duration::from_secs(600),
             ..QueueRules::default()
         };
-        let ms = |v: &[u64]| v.iter().map(|&m| Duration::from_millis(m)).collect();
-        assert_eq!(
-            lifetime(&ms(&[5000; 7]), &rules),
-            rules.max_lease,
-            "too few"
-        );
-        assert_eq!(lifetime(&ms(&[40; 8]), &rules), rules.lease, "floor");
+        let ms = |v: &[u64]| {
+            let mut times = LeaseTimes::default();
+            let t0 = Instant::now();
+            for &m in v {
+                times.measure(t0, t0 + Duration::from_millis(m));
+            }
+            times.median
+        };
+        assert_eq!(lifetime(ms(&[5000; 7]), &rules), rules.max_lease, "too few");
+        assert_eq!(lifetime(ms(&[40; 8]), &rules), rules.lease, "floor");
         // Median 5 s, which three slow outliers do not move: 40 s.
         let mixed = ms(&[
             5000, 5000, 5000, 5000, 5000, 9_000_000, 9_000_000, 9_000_000,
         ]);
-        assert_eq!(lifetime(&mixed, &rules), Duration::from_secs(40));
+        assert_eq!(lifetime(mixed, &rules), Duration::from_secs(40));
         assert_eq!(
-            lifetime(&ms(&[200_000; 8]), &rules),
+            lifetime(ms(&[200_000; 8]), &rules),
             rules.max_lease,
             "ceiling"
         );

@@ -255,9 +255,41 @@ impl TaskQueue {
         wall_seconds: f64,
         now: Instant,
     ) -> Result<Disposition, QueueError> {
+        let mut results = self.report_all(caller, [(task, result, wall_seconds)], now)?;
+        results.pop().expect("one result per task")
+    }
+
+    /// [`TaskQueue::report`] for several tasks of one caller, proven once: one disposition or
+    /// refusal per task, in order; `Err` when the caller itself is refused.
+    pub fn report_all(
+        &self,
+        caller: &Caller,
+        results: impl IntoIterator<Item = (TaskId, Result<Outcome, String>, f64)>,
+        now: Instant,
+    ) -> Result<Vec<Result<Disposition, QueueError>>, QueueError> {
         let mut guard = self.lock();
-        let s = &mut *guard;
-        self.authenticate(s, caller)?;
+        self.authenticate(&guard, caller)?;
+        let dispositions = results
+            .into_iter()
+            .map(|(task, result, wall)| self.record(&mut guard, caller, task, result, wall, now))
+            .collect();
+        // The reporting worker may have a free slot now, or a task may be queued again: a
+        // waiting lease may be waiting for exactly this.
+        drop(guard);
+        self.work.notify_waiters();
+        Ok(dispositions)
+    }
+
+    /// One result of an authenticated caller.
+    fn record(
+        &self,
+        s: &mut State,
+        caller: &Caller,
+        task: TaskId,
+        result: Result<Outcome, String>,
+        wall_seconds: f64,
+        now: Instant,
+    ) -> Result<Disposition, QueueError> {
         let worker = caller.worker;
         let Some(t) = s.tasks.get_mut(&task) else {
             return match s.earlier.get(&task) {
@@ -302,7 +334,7 @@ impl TaskQueue {
                     w.last_asked = now;
                 }
                 if let Some(granted) = holder {
-                    s.measure(granted, now);
+                    s.lease_times.measure(granted, now);
                 }
                 let origin = if trusted {
                     Origin::Trusted
@@ -330,10 +362,6 @@ impl TaskQueue {
                 Disposition::ErrorNoted
             }
         };
-        // The reporting worker may have a free slot now, or the task may be queued again: a
-        // waiting lease may be waiting for exactly this.
-        drop(guard);
-        self.work.notify_waiters();
         Ok(disposition)
     }
 
