@@ -2,6 +2,7 @@
 //! an evaluator (local threads, or gRPC workers), applies deterministic crowding and migration, and
 //! writes the results folder.
 
+pub mod asked;
 pub mod cluster;
 pub mod config;
 pub mod evaluator;

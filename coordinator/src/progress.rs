@@ -1,14 +1,31 @@
 //! The terminal progress bar: evaluations, evaluations per second, the best design's headline
-//! figure overall and per island, and the cluster's state (workers, leases).
+//! figure overall and per island, and the cluster's state (workers, leases). An embedding program
+//! (the Python package) hears each epoch's history rows through an observer instead.
+
+use std::sync::Arc;
 
 use amorph::voxel::GridDims;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::summary::RunSummary;
+use crate::summary::{HistoryRow, RunSummary};
 
 #[derive(Debug, Clone)]
 pub struct Progress {
     bar: ProgressBar,
+    observer: Option<Observer>,
+}
+
+/// What an observer does with an epoch's history rows.
+type EpochRows = dyn Fn(&[HistoryRow]) + Send + Sync;
+
+/// Called with each island's history row at the end of every epoch, from the run's thread.
+#[derive(Clone)]
+struct Observer(Arc<EpochRows>);
+
+impl std::fmt::Debug for Observer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Observer")
+    }
 }
 
 impl Progress {
@@ -24,13 +41,32 @@ impl Progress {
             )
             .expect("static template is valid"),
         );
-        Self { bar }
+        Self {
+            bar,
+            observer: None,
+        }
     }
 
     /// Reports nothing (tests, embedded use).
     pub fn hidden() -> Self {
         Self {
             bar: ProgressBar::hidden(),
+            observer: None,
+        }
+    }
+
+    /// No bar; `observer` hears every epoch's history rows, one per island.
+    pub fn observed(observer: impl Fn(&[HistoryRow]) + Send + Sync + 'static) -> Self {
+        Self {
+            bar: ProgressBar::hidden(),
+            observer: Some(Observer(Arc::new(observer))),
+        }
+    }
+
+    /// The epoch's history rows, for the observer if there is one.
+    pub fn history(&self, rows: &[HistoryRow]) {
+        if let Some(Observer(observer)) = &self.observer {
+            observer(rows);
         }
     }
 

@@ -3,6 +3,7 @@
 //! and `worker export` do the same evaluation offline for a saved genome.
 
 pub mod client;
+pub mod export;
 pub mod pool;
 
 pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
@@ -37,12 +38,16 @@ pub type Result<T> = std::result::Result<T, WorkerError>;
 /// under `genome` (`best_genome.json`, `island-<i>-best.json`). Errors name the field
 /// (`genome.points[3].material`), not just a position in the text.
 pub fn read_genome(path: &Path) -> Result<Genome> {
-    let text = read(path)?;
+    parse_genome(&read(path)?, &path.display().to_string())
+}
+
+/// [`read_genome`] for text already read; `source` names it in errors.
+pub fn parse_genome(text: &str, source: &str) -> Result<Genome> {
     let parse_error = |message: String| WorkerError::Parse {
-        path: path.display().to_string(),
+        path: source.to_owned(),
         message,
     };
-    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         // JSON has no NaN or Infinity; serde_json only says "expected value" where one stands.
         let hint = if ["NaN", "Infinity"].iter().any(|w| text.contains(w)) {
             " (JSON has no NaN or Infinity: every number must be finite)"

@@ -20,11 +20,11 @@ use crate::verification::{self, Decisive, EARLIER_SESSION, Evaluated};
 /// counted, the last task number given, and the outcomes an earlier, interrupted session of the
 /// run stored, by task id (see [`crate::store`]), which a batch takes instead of evaluating again.
 #[derive(Debug, Default)]
-pub(super) struct Ledger {
-    pub(super) epoch: usize,
-    pub(super) evaluations: u64,
-    pub(super) next_task: u64,
-    pub(super) replay: HashMap<TaskId, StoredEvaluation>,
+pub(crate) struct Ledger {
+    pub(crate) epoch: usize,
+    pub(crate) evaluations: u64,
+    pub(crate) next_task: u64,
+    pub(crate) replay: HashMap<TaskId, StoredEvaluation>,
 }
 
 /// One batch of genomes per island, numbered as tasks of the search: the unit a purpose, a
@@ -50,7 +50,7 @@ impl Part {
         purpose: Purpose,
     ) -> Self {
         let epoch = match purpose {
-            Purpose::Child => ledger.epoch + 1,
+            Purpose::Child | Purpose::Asked => ledger.epoch + 1,
             Purpose::Initial | Purpose::Reevaluation | Purpose::FinestCheck => ledger.epoch,
         };
         let mut tasks = Vec::new();
@@ -317,7 +317,7 @@ pub(super) fn settle(
 
 /// [`evaluate_all`] then [`settle`] with every claim decisive: a batch whose every outcome the
 /// search keeps (initial populations, re-evaluations, checks at the finest level).
-pub(super) fn evaluate_settled(
+pub(crate) fn evaluate_settled(
     ledger: &mut Ledger,
     evaluator: &mut dyn Evaluator,
     genomes: &[Vec<Genome>],

@@ -2,7 +2,7 @@
 //! resolution switch when progress stalls) until a stopping rule holds, with everything written as
 //! it happens. What changes the search is in `search.rs`, one batch of evaluations in `batch.rs`.
 
-mod batch;
+pub(crate) mod batch;
 mod search;
 
 use std::sync::Arc;
@@ -75,10 +75,12 @@ pub fn run(
             break reason;
         }
         let replacements = search.epoch(config, dims, evaluator, ctx)?;
-        for row in search.history_rows(&scene, dims, &replacements) {
-            writer.history(&row)?;
-            history.push(row);
+        let rows = search.history_rows(&scene, dims, &replacements);
+        for row in &rows {
+            writer.history(row)?;
         }
+        ctx.progress.history(&rows);
+        history.extend(rows);
         let migrations = search.migrate(config);
         record_epoch(&search, &migrations, dims, ctx.store)?;
         diversity.record(

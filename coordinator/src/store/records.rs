@@ -16,14 +16,17 @@ pub enum Purpose {
     Reevaluation,
     /// The run's best at a coarse level, evaluated at the finest (`resolution.stall_on_finest`).
     FinestCheck,
+    /// A genome a caller outside the search asked for (`AskedRun`: an optimizer of its own).
+    Asked,
 }
 
 impl Purpose {
-    const ALL: [Self; 4] = [
+    const ALL: [Self; 5] = [
         Self::Initial,
         Self::Child,
         Self::Reevaluation,
         Self::FinestCheck,
+        Self::Asked,
     ];
 
     /// The purpose a store names `name`.
@@ -37,6 +40,7 @@ impl Purpose {
             Self::Child => "child",
             Self::Reevaluation => "reevaluation",
             Self::FinestCheck => "finest_check",
+            Self::Asked => "asked",
         }
     }
 }

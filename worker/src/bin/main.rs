@@ -6,9 +6,11 @@
 use std::path::PathBuf;
 
 use amorph::dynamics::EvaluationThreads;
+use amorph::export::PrintPitch;
 use amorph::genome::Genome;
 use amorph::task::Scene;
 use amorph::voxel::GridDims;
+use amorph_worker::export::{ExportOptions, export_design};
 use amorph_worker::{WorkerOptions, run_worker};
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
@@ -93,12 +95,11 @@ struct Design {
 }
 
 impl Design {
-    /// `f` on the calling thread, or sharing a pool of `--threads` threads.
-    fn on_threads<R: Send>(&self, f: impl FnOnce() -> R + Send) -> anyhow::Result<R> {
+    /// The pool of `--threads` threads an evaluation shares (the calling thread alone for 1).
+    fn threads(&self) -> anyhow::Result<EvaluationThreads> {
         let threads = thread_count("--threads", self.threads)?;
-        let shared = EvaluationThreads::new(threads, |j| format!("evaluate-{j}"))
-            .with_context(|| format!("starting {threads} threads"))?;
-        Ok(shared.run(f))
+        EvaluationThreads::new(threads, |j| format!("evaluate-{j}"))
+            .with_context(|| format!("starting {threads} threads"))
     }
 
     fn load(&self) -> anyhow::Result<(Genome, Scene, GridDims)> {
@@ -164,7 +165,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             let (genome, scene, dims) = design.load()?;
             amorph::task::memory::check(&scene, dims, amorph::task::memory::default_budget())
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
-            let outcome = design.on_threads(|| scene.evaluate(&genome, dims))?;
+            let outcome = design.threads()?.run(|| scene.evaluate(&genome, dims));
             print(&serde_json::to_string_pretty(&outcome).context("serialising the outcome")?)?;
         }
         Command::Export {
@@ -176,47 +177,27 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
             print_layer_mm,
         } => {
             let (genome, scene, dims) = design.load()?;
-            genome
-                .validate(scene.limits(), scene.palette().len())
-                .context("the genome does not fit the scene")?;
-            let grid = scene.design(&genome, dims);
-            // The task's own pictures (a beam's profile, a robot's walk) and a robot's VXA (its
-            // measured settle) need its evaluation.
-            let outcome = design.on_threads(|| scene.evaluate(&genome, dims))?;
-            let mut files =
-                amorph::export::write_fabrication_files(&out, &grid, &scene, Some(&outcome))
-                    .with_context(|| format!("writing into {}", out.display()))?;
-            if let Some(samples) = smooth {
-                files.extend(
-                    amorph::export::write_smooth_surfaces(&out, &genome, &scene, dims, samples)
-                        .with_context(|| {
-                            format!("writing smooth surfaces into {}", out.display())
-                        })?,
-                );
-            }
-            if slices {
-                let pitch = amorph::export::PrintPitch {
+            let options = ExportOptions {
+                smooth,
+                print: slices.then(|| PrintPitch {
                     dpi_x: print_dpi[0],
                     dpi_y: print_dpi[1],
                     layer_mm: print_layer_mm,
-                };
-                files.extend(
-                    amorph::export::write_slice_stack(&out, &genome, &scene, dims, pitch)
-                        .with_context(|| {
-                            format!("writing the slice stack into {}", out.display())
-                        })?,
-                );
-            }
-            let artefacts = scene
-                .write_artefacts(&out, &genome, dims, &outcome)
-                .with_context(|| format!("writing the task's pictures into {}", out.display()))?;
+                }),
+            };
+            // The task's own pictures (a beam's profile, a robot's walk) and a robot's VXA (its
+            // measured settle) need its evaluation.
+            let threads = design.threads()?;
+            let exported = export_design(&genome, &scene, dims, &out, options, || {
+                threads.run(|| scene.evaluate(&genome, dims))
+            })?;
             print(&format!(
                 "{} voxels, {}; wrote {} files into {}",
-                grid.filled_count(),
+                exported.voxels,
                 scene
-                    .headline(&outcome)
-                    .unwrap_or_else(|| format!("{outcome:?}")),
-                files.len() + artefacts.len(),
+                    .headline(&exported.outcome)
+                    .unwrap_or_else(|| format!("{:?}", exported.outcome)),
+                exported.files.len(),
                 out.display()
             ))?;
         }
