@@ -16,6 +16,7 @@ from ._amorph import (
     Scene,
     __version__,
 )
+from ._encoding import unit_genome
 from ._runs import Run, RunStore, Table, open_run, run
 
 __all__ = [
@@ -31,4 +32,5 @@ __all__ = [
     "__version__",
     "open_run",
     "run",
+    "unit_genome",
 ]

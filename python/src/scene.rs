@@ -107,6 +107,18 @@ impl PyScene {
             .collect()
     }
 
+    /// The genome limits: `density` and `falloff` as (low, high), `max_points`, `min_points`.
+    #[getter]
+    fn limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let limits = self.inner.limits();
+        let dict = PyDict::new(py);
+        dict.set_item("density", (limits.density[0], limits.density[1]))?;
+        dict.set_item("falloff", (limits.falloff[0], limits.falloff[1]))?;
+        dict.set_item("max_points", limits.max_points)?;
+        dict.set_item("min_points", limits.min_points)?;
+        Ok(dict)
+    }
+
     /// The material index of each voxel as an int16 array of shape (nx, ny, nz), -1 where empty:
     /// the voxels the task uses (a beam keeps those connected to its clamped layer), as a run's
     /// `best_voxels.json` holds them.

@@ -60,6 +60,7 @@ pub fn export_design(
     };
     let grid = scene.design(genome, dims);
     let outcome = evaluate();
+    // The writers name their files relative to `out`.
     let mut files = amorph::export::write_fabrication_files(out, &grid, scene, Some(&outcome))
         .map_err(write_error("the fabrication files"))?;
     if let Some(samples) = options.smooth {
@@ -77,7 +78,8 @@ pub fn export_design(
     let artefacts = scene
         .write_artefacts(out, genome, dims, &outcome)
         .map_err(write_error("the task's pictures"))?;
-    files.extend(artefacts.into_iter().map(|a| out.join(a.path)));
+    files.extend(artefacts.into_iter().map(|a| PathBuf::from(a.path)));
+    let files = files.into_iter().map(|f| out.join(f)).collect();
     Ok(Exported {
         files,
         voxels: grid.filled_count(),

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Every test: the Rust workspace's (cargo test), then the Python package's (pytest), with the
+# package built and installed into a fresh virtual environment as a user's `pip install ./python`
+# would. Needs Python >= 3.9 with venv and pip; PyPI for maturin, numpy, pytest, cma and pymoo.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo test --workspace --locked
+python="${PYTHON:-python3}"
+venv=target/python-tests
+rm -rf "$venv"
+"$python" -m venv "$venv"
+"$venv/bin/pip" install --quiet --upgrade pip
+"$venv/bin/pip" install --quiet "./python[test,examples]"
+# The tests run from the package's own folder, against the installed wheel (not the sources),
+# and compare with the worker that cargo test just built.
+AMORPH_BIN_DIR="$PWD/target/debug" "$venv/bin/python" -m pytest python/tests -q -p no:cacheprovider
