@@ -9,6 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use rusqlite::{Connection, OpenFlags};
 
+/// A column's type in Python.
 #[derive(Clone, Copy)]
 enum Column {
     /// int64; a NULL is -1.
@@ -98,63 +99,75 @@ pub fn read_run_store<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py
             file.display()
         )));
     }
-    let conn = Connection::open_with_flags(
-        &file,
-        OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
-    )
-    .map_err(|e| store_error(&file, e))?;
-    // One read transaction, so every table is read at the same moment of a run that goes on.
-    conn.execute_batch("BEGIN")
-        .map_err(|e| store_error(&file, e))?;
-    let config: String = conn
-        .query_row("SELECT value FROM run WHERE key = 'config'", [], |r| {
-            r.get(0)
-        })
+    // SQLite's part runs without the GIL; only the Python objects are made with it.
+    let (config, tables) = py
+        .detach(|| read_tables(&file))
         .map_err(|e| store_error(&file, e))?;
     let dict = PyDict::new(py);
     dict.set_item("path", &file)?;
     dict.set_item("config", config)?;
-    for spec in TABLES {
-        let columns =
-            table(py, &conn, spec.sql, spec.columns).map_err(|e| store_error(&file, e))??;
-        dict.set_item(spec.name, columns)?;
+    for (spec, columns) in TABLES.iter().zip(tables) {
+        let table = PyDict::new(py);
+        for ((name, _), values) in spec.columns.iter().zip(columns) {
+            match values {
+                Values::Int(v) => table.set_item(*name, PyArray1::from_vec(py, v))?,
+                Values::Float(v) => table.set_item(*name, PyArray1::from_vec(py, v))?,
+                Values::Text(v) => table.set_item(*name, PyList::new(py, v)?)?,
+            }
+        }
+        dict.set_item(spec.name, table)?;
     }
-    let _ = conn.execute_batch("COMMIT");
     Ok(dict)
 }
 
-fn table<'py>(
-    py: Python<'py>,
-    conn: &Connection,
-    sql: &str,
-    columns: &[(&str, Column)],
-) -> rusqlite::Result<PyResult<Bound<'py, PyDict>>> {
-    let mut ints: Vec<Vec<i64>> = vec![Vec::new(); columns.len()];
-    let mut floats: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
-    let mut texts: Vec<Vec<String>> = vec![Vec::new(); columns.len()];
-    let mut stmt = conn.prepare(sql)?;
+/// One column's values.
+enum Values {
+    Int(Vec<i64>),
+    Float(Vec<f64>),
+    Text(Vec<String>),
+}
+
+/// The config and every table's columns, in one read transaction so that all are read at the
+/// same moment of a run that goes on.
+fn read_tables(file: &Path) -> rusqlite::Result<(String, Vec<Vec<Values>>)> {
+    let conn = Connection::open_with_flags(
+        file,
+        OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+    )?;
+    conn.execute_batch("BEGIN")?;
+    let config: String = conn.query_row("SELECT value FROM run WHERE key = 'config'", [], |r| {
+        r.get(0)
+    })?;
+    let tables = TABLES
+        .iter()
+        .map(|spec| read_table(&conn, spec))
+        .collect::<rusqlite::Result<Vec<_>>>()?;
+    conn.execute_batch("COMMIT")?;
+    Ok((config, tables))
+}
+
+fn read_table(conn: &Connection, spec: &TableSpec) -> rusqlite::Result<Vec<Values>> {
+    let mut columns: Vec<Values> = spec
+        .columns
+        .iter()
+        .map(|(_, kind)| match kind {
+            Int => Values::Int(Vec::new()),
+            Float => Values::Float(Vec::new()),
+            Text => Values::Text(Vec::new()),
+        })
+        .collect();
+    let mut stmt = conn.prepare(spec.sql)?;
     let mut rows = stmt.query([])?;
     while let Some(row) = rows.next()? {
-        for (i, (_, kind)) in columns.iter().enumerate() {
-            match kind {
-                Int => ints[i].push(row.get::<_, Option<i64>>(i)?.unwrap_or(-1)),
-                Float => floats[i].push(row.get::<_, Option<f64>>(i)?.unwrap_or(f64::NAN)),
-                Text => texts[i].push(row.get(i)?),
+        for (i, column) in columns.iter_mut().enumerate() {
+            match column {
+                Values::Int(v) => v.push(row.get::<_, Option<i64>>(i)?.unwrap_or(-1)),
+                Values::Float(v) => v.push(row.get::<_, Option<f64>>(i)?.unwrap_or(f64::NAN)),
+                Values::Text(v) => v.push(row.get(i)?),
             }
         }
     }
-    let build = || -> PyResult<Bound<'py, PyDict>> {
-        let dict = PyDict::new(py);
-        for (i, (name, kind)) in columns.iter().enumerate() {
-            match kind {
-                Int => dict.set_item(*name, PyArray1::from_vec(py, ints[i].clone()))?,
-                Float => dict.set_item(*name, PyArray1::from_vec(py, floats[i].clone()))?,
-                Text => dict.set_item(*name, PyList::new(py, &texts[i])?)?,
-            }
-        }
-        Ok(dict)
-    };
-    Ok(build())
+    Ok(columns)
 }
 
 fn store_error(path: &Path, e: rusqlite::Error) -> PyErr {

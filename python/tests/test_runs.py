@@ -24,8 +24,16 @@ def short(name, **extra):
 
 
 def test_a_run_reports_each_epoch_and_its_store_reads_back(in_tmp):
-    epochs = []
-    summary = amorph.run(progress=epochs.append, **short("whole"))
+    epochs, live = [], []
+
+    def progress(epoch):
+        epochs.append(epoch)
+        # The store of the run going on, read while it writes: at least this epoch is in it.
+        store = amorph.open_run("results/whole")
+        live.append(len(store.evaluations) >= epoch["evaluations"] and len(store.epochs) >= epoch["epoch"])
+
+    summary = amorph.run(progress=progress, **short("whole"))
+    assert live and all(live)
     assert summary["stop"] == "evaluation_budget" and summary["evaluations"] == 400
     assert [e["epoch"] for e in epochs] == list(range(1, summary["epochs"] + 1))
     store = amorph.open_run("results/whole")
@@ -74,10 +82,16 @@ def test_a_stopped_run_resumes_to_the_bits_of_an_uninterrupted_one(in_tmp):
 
 
 def test_ctrl_c_stops_a_run_that_then_resumes(in_tmp):
+    # Long enough that the signal comes mid-run on any machine.
+    keys = short("interrupted", budget={"evaluations": 1500, "target_rms_percent": 0.0001})
+    # An interactive Python turns SIGINT into KeyboardInterrupt; a child of a shell script that
+    # runs in the background (as CI may) starts with SIGINT ignored, so the child asks for it.
     script = textwrap.dedent(
         f"""
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         import amorph
-        amorph.run(progress=lambda e: print("epoch", e["epoch"], flush=True), **{short("interrupted")!r})
+        amorph.run(progress=lambda e: print("epoch", e["epoch"], flush=True), **{keys!r})
         """
     )
     child = subprocess.Popen(
@@ -92,9 +106,10 @@ def test_ctrl_c_stops_a_run_that_then_resumes(in_tmp):
     _, err = child.communicate(timeout=60)
     assert child.returncode != 0 and "KeyboardInterrupt" in err
     stored = len(amorph.open_run("results/interrupted").evaluations)
-    assert 0 < stored < 400
-    resumed = amorph.run(resume=True, **short("interrupted"))
-    whole = amorph.run(**short("whole"))
+    assert 0 < stored < 1500
+    resumed = amorph.run(resume=True, **keys)
+    whole = amorph.run(**dict(keys, name="whole"))
+    assert resumed["evaluations"] == whole["evaluations"] == 1500
     assert resumed["best_outcome"] == whole["best_outcome"]
 
 

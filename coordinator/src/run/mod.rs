@@ -79,10 +79,11 @@ pub fn run(
         for row in &rows {
             writer.history(row)?;
         }
-        ctx.progress.history(&rows);
-        history.extend(rows);
         let migrations = search.migrate(config);
         record_epoch(&search, &migrations, dims, ctx.store)?;
+        // An observer hears of the epoch once the store holds it.
+        ctx.progress.history(&rows);
+        history.extend(rows);
         diversity.record(
             search.ledger.epoch,
             search.ledger.evaluations,
