@@ -8,7 +8,9 @@
 
 Run from the repository's root, with the package installed (pip install ./python):
 
-    python python/benches/overhead.py --rounds 5
+    taskset -c 1 python python/benches/overhead.py --rounds 20 --calls 100
+
+(taskset keeps both on one core, out of the way of the scheduler's moves.)
 """
 
 import argparse
@@ -28,10 +30,14 @@ RESOLUTION = "6x20x6"
 
 def genome(scene):
     """The benchmark's design: a spanning random genome, the same every time."""
-    rng = np.random.default_rng(1)
+    return spanning(scene, 1)
+
+
+def spanning(scene, seed):
+    """A random genome of positive density that the beam evaluates."""
+    rng = np.random.default_rng(seed)
     while True:
-        g = amorph.unit_genome(scene, rng.uniform(size=30 * 6))
-        a = g.to_array()
+        a = amorph.unit_genome(scene, rng.uniform(size=30 * 6)).to_array()
         a[:, 3] = np.abs(a[:, 3])
         g = amorph.Genome(a)
         if scene.evaluate(g, RESOLUTION).ok:
@@ -57,8 +63,8 @@ def rust_seconds(path, calls):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", type=int, default=5)
-    parser.add_argument("--calls", type=int, default=300)
+    parser.add_argument("--rounds", type=int, default=20)
+    parser.add_argument("--calls", type=int, default=100)
     args = parser.parse_args()
     scene = amorph.Scene.from_file(os.path.join(REPO, "configs", "quickstart.toml"))
     g = genome(scene)
@@ -69,20 +75,29 @@ def main():
         print(f"load average {os.getloadavg()[0]:.2f}")
         ratios = []
         for r in range(args.rounds):
-            rust = rust_seconds(path, args.calls)
-            py = python_seconds(scene, g, args.calls)
+            # Alternate which goes first, so a drift in the machine's load favours neither.
+            if r % 2:
+                py = python_seconds(scene, g, args.calls)
+                rust = rust_seconds(path, args.calls)
+            else:
+                rust = rust_seconds(path, args.calls)
+                py = python_seconds(scene, g, args.calls)
             ratios.append(py / rust)
             print(f"round {r + 1}: rust {rust * 1e3:.3f} ms, python {py * 1e3:.3f} ms, ratio {py / rust:.4f}")
         print(f"python / rust: median {np.median(ratios):.4f}, range {min(ratios):.4f} to {max(ratios):.4f}")
-    rng = np.random.default_rng(2)
-    many = [amorph.unit_genome(scene, rng.uniform(size=30 * 6)) for _ in range(64)]
-    base = None
-    for threads in range(1, (os.cpu_count() or 1) + 1):
-        start = time.perf_counter()
-        scene.evaluate_many(many, RESOLUTION, threads=threads)
-        seconds = time.perf_counter() - start
-        base = base or seconds
-        print(f"evaluate_many, 64 genomes, {threads} threads: {seconds:.3f} s, speed-up {base / seconds:.2f}")
+    # Spanning designs, so that every evaluation runs the solver, as a search's mostly do.
+    many = [spanning(scene, seed) for seed in range(64)]
+    counts = list(range(1, len(os.sched_getaffinity(0)) + 1))
+    seconds = {n: [] for n in counts}
+    for _ in range(3):
+        for n in counts:
+            start = time.perf_counter()
+            scene.evaluate_many(many, RESOLUTION, threads=n)
+            seconds[n].append(time.perf_counter() - start)
+    one = np.median(seconds[1])
+    for n in counts:
+        t = np.median(seconds[n])
+        print(f"evaluate_many, 64 genomes, {n} threads: {t:.3f} s (median of 3), speed-up {one / t:.2f}")
     print(f"load average {os.getloadavg()[0]:.2f}")
     sys.stdout.flush()
 

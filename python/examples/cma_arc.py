@@ -25,7 +25,16 @@ def optimize(cluster, points=12, evaluations=2000, seed=1, resolution="6x20x6"):
     es = cma.CMAEvolutionStrategy(
         np.full(points * 6, 0.5),
         0.3,
-        {"bounds": [0.0, 1.0], "seed": seed, "maxfevals": evaluations, "verbose": -9},
+        # A first batch that all fails (no design reaches the free end) is flat, which would
+        # end CMA-ES at once (tolfun, tolflatfitness): go on until the budget instead.
+        {
+            "bounds": [0.0, 1.0],
+            "seed": seed,
+            "maxfevals": evaluations,
+            "tolfun": 0.0,
+            "tolflatfitness": evaluations,
+            "verbose": -9,
+        },
     )
     best = (np.inf, None)
     while not es.stop():

@@ -160,11 +160,11 @@ impl PyScene {
         let dims = self.checked(&genome.inner, resolution)?;
         let pool = evaluation_threads(threads)?;
         let scene = &*self.inner;
-        let outcome = interruptible(
-            py,
-            || {},
-            || pool.run(|| scene.evaluate(&genome.inner, dims)),
-        )?;
+        // On this thread, not a helper's as the other long calls: one evaluation cannot be
+        // stopped midway anyway, and a thread per call cost a measurable part of a small beam's
+        // evaluation (docs/python.md). Ctrl-C raises once the evaluation ends.
+        let outcome = py.detach(|| pool.run(|| scene.evaluate(&genome.inner, dims)));
+        py.check_signals()?;
         Ok(PyOutcome::new(outcome, scene))
     }
 
