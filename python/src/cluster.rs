@@ -4,14 +4,14 @@
 //! store ([`amorph_coordinator::asked`]).
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use amorph::genome::Genome;
 use amorph::task::Scene;
 use amorph::voxel::GridDims;
 use amorph_coordinator::asked::AskedRun;
-use amorph_coordinator::job::{JobOptions, StoreMode};
+use amorph_coordinator::job::JobOptions;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -19,7 +19,7 @@ use pyo3::types::PyDict;
 use crate::genome::PyGenome;
 use crate::interrupt::interruptible;
 use crate::outcome::PyOutcome;
-use crate::runs::load_config;
+use crate::runs::{load_config, store_mode};
 use crate::scene::{PyScene, check_genome};
 
 /// A coordinator serving evaluations to whoever asks from Python.
@@ -27,6 +27,8 @@ use crate::scene::{PyScene, check_genome};
 #[derive(Debug)]
 pub struct PyCluster {
     run: Mutex<Option<AskedRun>>,
+    /// Evaluations asked so far, readable while a batch runs.
+    evaluations: AtomicU64,
     shutdown: Arc<AtomicBool>,
     scene: Arc<Scene>,
     finest: GridDims,
@@ -51,11 +53,7 @@ impl PyCluster {
         fresh: bool,
         overrides: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        if resume && fresh {
-            return Err(PyValueError::new_err(
-                "resume and fresh exclude each other: resume continues the stored run, fresh deletes it",
-            ));
-        }
+        let store = store_mode(resume, fresh)?;
         let py_overrides = match overrides {
             Some(d) => d.clone(),
             None => PyDict::new(py),
@@ -63,13 +61,7 @@ impl PyCluster {
         let config = load_config(config, &py_overrides)?;
         let shutdown = Arc::new(AtomicBool::new(false));
         let options = JobOptions {
-            store: if resume {
-                StoreMode::Resume
-            } else if fresh {
-                StoreMode::Fresh
-            } else {
-                StoreMode::New
-            },
+            store,
             listen,
             local_workers,
             shutdown: shutdown.clone(),
@@ -80,6 +72,7 @@ impl PyCluster {
         Ok(Self {
             url: run.url().to_owned(),
             store: run.store_path().to_owned(),
+            evaluations: AtomicU64::new(run.evaluations()),
             run: Mutex::new(Some(run)),
             shutdown,
             scene: Arc::new(config.scene.clone()),
@@ -114,7 +107,7 @@ impl PyCluster {
         self.scene
             .check_dims(dims)
             .map_err(|e| PyValueError::new_err(format!("resolution {dims}: {e}")))?;
-        let mut guard = self.run.lock().unwrap_or_else(|e| e.into_inner());
+        let mut guard = self.idle()?;
         let Some(run) = guard.as_mut() else {
             return Err(PyRuntimeError::new_err("the cluster is closed"));
         };
@@ -125,6 +118,7 @@ impl PyCluster {
             || run.evaluate(&genomes, dims),
         )?
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        self.evaluations.store(run.evaluations(), Ordering::Relaxed);
         Ok(outcomes
             .into_iter()
             .map(|o| PyOutcome::new(o, &self.scene))
@@ -154,17 +148,17 @@ impl PyCluster {
     /// Evaluations asked so far.
     #[getter]
     fn evaluations(&self) -> u64 {
-        let guard = self.run.lock().unwrap_or_else(|e| e.into_inner());
-        guard.as_ref().map_or(0, AskedRun::evaluations)
+        self.evaluations.load(Ordering::Relaxed)
     }
 
     /// Stops the coordinator: remote workers are told the run is over (after a Ctrl-C they wait
     /// for its resumption instead). Closing twice does nothing.
-    fn close(&self, py: Python<'_>) {
-        let run = self.run.lock().unwrap_or_else(|e| e.into_inner()).take();
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        let run = self.idle()?.take();
         if let Some(run) = run {
             py.detach(|| run.close());
         }
+        Ok(())
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
@@ -172,8 +166,8 @@ impl PyCluster {
     }
 
     #[pyo3(signature = (*_exc))]
-    fn __exit__(&self, py: Python<'_>, _exc: &Bound<'_, pyo3::types::PyTuple>) {
-        self.close(py);
+    fn __exit__(&self, py: Python<'_>, _exc: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<()> {
+        self.close(py)
     }
 
     fn __repr__(&self) -> String {
@@ -182,6 +176,20 @@ impl PyCluster {
             self.url,
             self.store.display().to_string()
         )
+    }
+}
+
+impl PyCluster {
+    /// The run, unless another Python thread is in `evaluate`: waiting for it here, holding the
+    /// GIL, would keep that thread from the GIL it needs to look at signals.
+    fn idle(&self) -> PyResult<std::sync::MutexGuard<'_, Option<AskedRun>>> {
+        match self.run.try_lock() {
+            Ok(guard) => Ok(guard),
+            Err(std::sync::TryLockError::Poisoned(e)) => Ok(e.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => Err(PyRuntimeError::new_err(
+                "the cluster is evaluating a batch for another thread: one batch at a time",
+            )),
+        }
     }
 }
 

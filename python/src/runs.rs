@@ -52,23 +52,13 @@ impl PyRunHandle {
         local_workers: Option<usize>,
         listen: Option<String>,
     ) -> PyResult<Self> {
-        if resume && fresh {
-            return Err(PyValueError::new_err(
-                "resume and fresh exclude each other: resume continues the stored run, fresh deletes it",
-            ));
-        }
+        let store = store_mode(resume, fresh)?;
         let config = load_config(config, overrides)?;
         let (tx, events) = mpsc::channel();
         let shutdown = Arc::new(AtomicBool::new(false));
         let epochs = tx.clone();
         let options = JobOptions {
-            store: if resume {
-                StoreMode::Resume
-            } else if fresh {
-                StoreMode::Fresh
-            } else {
-                StoreMode::New
-            },
+            store,
             listen,
             local_workers,
             progress: Progress::observed(move |rows| {
@@ -162,6 +152,19 @@ impl Drop for PyRunHandle {
     fn drop(&mut self) {
         self.shutdown.store(true, Ordering::Relaxed);
         self.join();
+    }
+}
+
+/// How to open the run store: `resume` continues it, `fresh` deletes it first, neither makes a
+/// new one (an existing store is then an error).
+pub fn store_mode(resume: bool, fresh: bool) -> PyResult<StoreMode> {
+    match (resume, fresh) {
+        (true, true) => Err(PyValueError::new_err(
+            "resume and fresh exclude each other: resume continues the stored run, fresh deletes it",
+        )),
+        (true, false) => Ok(StoreMode::Resume),
+        (false, true) => Ok(StoreMode::Fresh),
+        (false, false) => Ok(StoreMode::New),
     }
 }
 

@@ -77,3 +77,22 @@ def test_bad_batches_raise_naming_the_genome(scene, in_tmp):
         assert cluster.evaluations == 0
     with pytest.raises(RuntimeError, match="closed"):
         cluster.evaluate([random_genome(np.random.default_rng(1))], COARSE)
+
+
+def test_a_second_thread_is_refused_while_a_batch_runs(scene, in_tmp):
+    import threading
+    import time
+
+    # Forty 12x40x12 beams on one worker take seconds; the checks below come 0.2 s in.
+    genomes = spanning_genomes(scene, 8, seed=31) * 5
+    with amorph.Cluster(name="threads", local_workers=1) as cluster:
+        results = []
+        asking = threading.Thread(target=lambda: results.append(cluster.evaluate(genomes, "12x40x12")))
+        asking.start()
+        time.sleep(0.2)
+        # Neither waits for the batch (which would hold the GIL the batch's thread needs).
+        assert cluster.evaluations == 0
+        with pytest.raises(RuntimeError, match="one batch at a time"):
+            cluster.evaluate(genomes[:1], COARSE)
+        asking.join(timeout=300)
+        assert len(results[0]) == 40 and cluster.evaluations == 40
