@@ -32,7 +32,11 @@ fn reference() -> String {
 fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
     let expected = reference();
 
-    let config = small_beam_config(&scratch_dir("cluster-one"), EVALUATIONS, SEED);
+    let config = farewell_tolerant(small_beam_config(
+        &scratch_dir("cluster-one"),
+        EVALUATIONS,
+        SEED,
+    ));
     let run = ClusterRun::start(&config, 0, None);
     let worker = TestWorker::start(&run.url(), 1, None);
     let summary = run.join();
@@ -40,7 +44,11 @@ fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
     assert_eq!(fingerprint(&summary), expected, "one worker");
     assert!(worker.join().unwrap().evaluated > 0);
 
-    let config = small_beam_config(&scratch_dir("cluster-two"), EVALUATIONS, SEED);
+    let config = farewell_tolerant(small_beam_config(
+        &scratch_dir("cluster-two"),
+        EVALUATIONS,
+        SEED,
+    ));
     let run = ClusterRun::start(&config, 0, None);
     let a = TestWorker::start(&run.url(), 1, None);
     let b = TestWorker::start(&run.url(), 1, None);
@@ -53,7 +61,11 @@ fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
     );
 
     // Kill one worker mid-run: its leases expire and go to the survivor.
-    let config = small_beam_config(&scratch_dir("cluster-killed"), EVALUATIONS, SEED);
+    let config = farewell_tolerant(small_beam_config(
+        &scratch_dir("cluster-killed"),
+        EVALUATIONS,
+        SEED,
+    ));
     let run = ClusterRun::start(&config, 0, None);
     let survivor = TestWorker::start(&run.url(), 1, None);
     let victim = TestWorker::start(&run.url(), 2, None);
@@ -63,6 +75,15 @@ fn one_two_and_a_killed_worker_give_the_in_process_result_bit_for_bit() {
     assert_eq!(summary.evaluations, EVALUATIONS);
     assert_eq!(fingerprint(&summary), expected, "a worker killed mid-run");
     assert!(survivor.join().is_ok());
+}
+
+/// `config` with a 5 s worker timeout: at the finish the coordinator serves until every worker has
+/// heard, for at most the worker timeout, and on a loaded machine the small config's 0.6 s can
+/// pass before a worker's next call, which then finds a closed port and fails after its retries
+/// (CI saw it under load). The leases of a killed worker still expire on their own lease time.
+fn farewell_tolerant(mut config: amorph_coordinator::RunConfig) -> amorph_coordinator::RunConfig {
+    config.cluster.worker_timeout_ms = 5_000;
+    config
 }
 
 /// A worker that connects to a run already under way finishes it, and the result is the
