@@ -179,16 +179,14 @@ impl PyScene {
         resolution: &Bound<'_, PyAny>,
         threads: Option<usize>,
     ) -> PyResult<Vec<PyOutcome>> {
-        let mut dims = None;
-        for (i, genome) in genomes.iter().enumerate() {
-            dims = Some(
-                self.checked(&genome.inner, resolution)
-                    .map_err(|e| PyValueError::new_err(format!("genomes[{i}]: {e}")))?,
-            );
-        }
-        let Some(dims) = dims else {
+        if genomes.is_empty() {
             return Ok(Vec::new());
-        };
+        }
+        let dims = self.checked_dims(resolution)?;
+        for (i, genome) in genomes.iter().enumerate() {
+            check_genome(&self.inner, &genome.inner)
+                .map_err(|e| PyValueError::new_err(format!("genomes[{i}]: {e}")))?;
+        }
         let threads = match threads {
             Some(n) => checked_threads(n)?,
             None => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -260,8 +258,14 @@ impl PyScene {
         genome: &Genome,
         resolution_arg: &Bound<'_, PyAny>,
     ) -> PyResult<GridDims> {
-        let dims = resolution(resolution_arg)?;
+        let dims = self.checked_dims(resolution_arg)?;
         check_genome(&self.inner, genome)?;
+        Ok(dims)
+    }
+
+    /// The resolution, once the task can use it and its grid fits the memory budget.
+    fn checked_dims(&self, resolution_arg: &Bound<'_, PyAny>) -> PyResult<GridDims> {
+        let dims = resolution(resolution_arg)?;
         self.inner
             .check_dims(dims)
             .map_err(|e| PyValueError::new_err(format!("resolution {dims}: {e}")))?;
