@@ -13,8 +13,8 @@ pub mod v1 {
 
 /// The version both sides must speak; bump it with any incompatible change to the `.proto`.
 /// Version 2: heartbeats carry the version too. Version 3: Register returns a session secret that
-/// every later call carries.
-pub const PROTOCOL_VERSION: u32 = 3;
+/// every later call carries. Version 4: a divergence is reported as its kind, value and limit.
+pub const PROTOCOL_VERSION: u32 = 4;
 
 /// Largest message either side decodes or encodes. A genome at the paper's scale is a few kB and a
 /// locomotion outcome's metrics a few tens of kB; 16 MiB leaves room for genomes of many thousands

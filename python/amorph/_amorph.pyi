@@ -35,6 +35,8 @@ class Failure:
     kind: str
     message: str
     time: Optional[float]
+    @property
+    def reason(self) -> Optional[Dict[str, Any]]: ...
     def to_dict(self) -> Dict[str, Any]: ...
 
 class Outcome:

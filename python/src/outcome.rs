@@ -1,5 +1,6 @@
 //! `amorph.Outcome` and `amorph.Failure`: what an evaluation returns, as Python objects.
 
+use amorph::dynamics::DivergenceReason;
 use amorph::outcome::Failure;
 use amorph::task::{Outcome, Scene};
 use pyo3::exceptions::PyValueError;
@@ -132,6 +133,7 @@ pub struct PyFailure {
     /// For `diverged`: the simulated time, s, at which the simulation diverged.
     #[pyo3(get)]
     time: Option<f64>,
+    reason: Option<DivergenceReason>,
 }
 
 impl From<&Failure> for PyFailure {
@@ -146,25 +148,38 @@ impl From<&Failure> for PyFailure {
             Failure::Internal(_) => "internal",
             Failure::Diverged { .. } => "diverged",
         };
-        let time = match failure {
-            Failure::Diverged { time, .. } => Some(*time),
-            _ => None,
+        let (time, reason) = match failure {
+            Failure::Diverged { time, reason } => (Some(*time), Some(reason.clone())),
+            _ => (None, None),
         };
         Self {
             kind,
             message: failure.to_string(),
             time,
+            reason,
         }
     }
 }
 
 #[pymethods]
 impl PyFailure {
+    /// For `diverged`: what crossed its limit, as a dict: `{"kind": "non_finite"}`,
+    /// `{"kind": "strain", "strain": ..., "limit": ...}` or
+    /// `{"kind": "runaway", "travel": ..., "limit": ...}` (travel in voxel sizes per step).
+    #[getter]
+    fn reason<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.reason
+            .as_ref()
+            .map(|r| json_to_py(py, &serde_json::to_value(r).expect("a reason serializes")))
+            .transpose()
+    }
+
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let dict = PyDict::new(py);
         dict.set_item("kind", self.kind)?;
         dict.set_item("message", &self.message)?;
         dict.set_item("time", self.time)?;
+        dict.set_item("reason", self.reason(py)?)?;
         Ok(dict)
     }
 

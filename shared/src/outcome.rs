@@ -2,7 +2,9 @@
 //! simulated is an outcome with a reason, never a panic and never a NaN fitness. The tasks
 //! (`crate::task`) fill in the metrics; nothing here knows what they are.
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
+
+use crate::dynamics::DivergenceReason;
 
 /// Why an evaluation produced no fitness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
@@ -27,7 +29,48 @@ pub enum Failure {
     #[error("internal error (a bug): {0}")]
     Internal(String),
     #[error("diverged at t = {time} s: {reason}")]
-    Diverged { reason: String, time: f64 },
+    Diverged {
+        #[serde(deserialize_with = "divergence_reason")]
+        reason: DivergenceReason,
+        time: f64,
+    },
+}
+
+/// A stored divergence reason: the typed form, or the sentence that run stores written before the
+/// reason was typed hold in its place (its numbers as printed, to three decimals for the measured
+/// value). A sentence of any other shape is refused, naming it.
+fn divergence_reason<'de, D: Deserializer<'de>>(d: D) -> Result<DivergenceReason, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Stored {
+        Typed(DivergenceReason),
+        Sentence(String),
+    }
+    match Stored::deserialize(d)? {
+        Stored::Typed(reason) => Ok(reason),
+        Stored::Sentence(text) => reason_from_sentence(&text)
+            .ok_or_else(|| serde::de::Error::custom(format!("unknown divergence reason {text:?}"))),
+    }
+}
+
+fn reason_from_sentence(text: &str) -> Option<DivergenceReason> {
+    let number = |s: &str| s.trim().parse::<f64>().ok();
+    if text == "non-finite state" {
+        return Some(DivergenceReason::NonFinite);
+    }
+    if let Some(rest) = text.strip_prefix("link strain ") {
+        let (strain, limit) = rest.split_once(" above the limit ")?;
+        return Some(DivergenceReason::Strain {
+            strain: number(strain)?,
+            limit: number(limit)?,
+        });
+    }
+    let rest = text.strip_prefix("a voxel moved ")?;
+    let (travel, limit) = rest.split_once(" voxel sizes in one step, above the limit ")?;
+    Some(DivergenceReason::Runaway {
+        travel: number(travel)?,
+        limit: number(limit)?,
+    })
 }
 
 /// What an evaluation returns: a fitness with the task's measurements `M` behind it, or a failure.
@@ -92,3 +135,6 @@ impl<M> Outcome<M> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -115,7 +115,7 @@ fn a_peers_starts_must_be_one_per_start_with_the_fitness_their_median() {
     let fewer = claim(|s| {
         s.pop();
     });
-    assert!(fewer.unwrap_err().contains("start_fitness has 2 values"));
+    assert!(fewer.unwrap_err().0.contains("start_fitness has 2 values"));
     let median = Starts::median_start(&metrics.start_fitness);
     let lifted = {
         let mut m = metrics.clone();
@@ -126,14 +126,15 @@ fn a_peers_starts_must_be_one_per_start_with_the_fitness_their_median() {
     assert!(
         lifted
             .unwrap_err()
+            .0
             .contains("is not the scored start's gait")
     );
     let far = claim(|s| s[0] = 1e9);
-    assert!(far.unwrap_err().contains("beyond what"));
+    assert!(far.unwrap_err().0.contains("beyond what"));
     let single = LocomotionScene {
         starts: Starts::default(),
         ..scene.clone()
     };
     let stray = single.check_metrics(fitness, &metrics, dims);
-    assert!(stray.unwrap_err().contains("expected 0"));
+    assert!(stray.unwrap_err().0.contains("expected 0"));
 }

@@ -87,12 +87,12 @@ impl CoordinatorService {
         let Some(dims) = self.queue.task_dims(task) else {
             return Ok(outcome); // unknown or finished: the queue answers for it
         };
-        self.scene
-            .check_outcome(&outcome, dims)
-            .map_err(|message| convert::WireError::Malformed {
+        self.scene.check_outcome(&outcome, dims).map_err(|claim| {
+            convert::WireError::Malformed {
                 field: "outcome.evaluated",
-                message,
-            })?;
+                message: claim.0,
+            }
+        })?;
         Ok(outcome)
     }
 }

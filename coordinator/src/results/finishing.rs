@@ -45,11 +45,15 @@ impl FinerCheck {
             finer_headline: None,
             note: None,
         };
-        let fits = scene.check_dims(finer).and_then(|()| {
-            amorph::task::memory::check(scene, finer, amorph::task::memory::default_budget())
-                .map_err(|e| e.to_string())
-        });
-        if let Err(e) = fits {
+        let refusal = match scene.check_dims(finer) {
+            Err(e) => Some(e.to_string()),
+            Ok(()) => {
+                amorph::task::memory::check(scene, finer, amorph::task::memory::default_budget())
+                    .err()
+                    .map(|e| e.to_string())
+            }
+        };
+        if let Some(e) = refusal {
             check.note = Some(format!("not evaluated at {finer}: {e}"));
             return check;
         }

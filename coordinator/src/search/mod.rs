@@ -4,6 +4,7 @@
 mod combination;
 mod diversity;
 #[cfg(test)]
+#[path = "tests/fixtures.rs"]
 mod fixtures;
 mod insertion;
 mod island;

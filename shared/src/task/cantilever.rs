@@ -6,23 +6,18 @@ use crate::material::Palette;
 use crate::outcome::Failure;
 use crate::statics::{self, StaticLoadCase, StaticModel, StaticSolution, StaticSolverParams};
 use crate::task::SceneError;
+use crate::task::error::ResolutionError;
 use crate::task::error::{finite, positive};
 use crate::voxel::{GridDims, VoxelGrid};
 
 /// The cantilever runs along y (clamped at y = 0, loaded at the last layer, deflecting in −z), so
-/// it needs two layers and y must be its longest count: 12x12x40 would be a 12-voxel beam 40
-/// voxels deep, almost surely a slip for the paper's 12x40x12.
-pub fn check_cantilever_dims(dims: GridDims) -> Result<(), String> {
+/// it needs two layers and y must be its longest count.
+pub fn check_cantilever_dims(dims: GridDims) -> Result<(), ResolutionError> {
     if dims.ny < 2 {
-        return Err(format!(
-            "a cantilever needs at least 2 layers along y, got {dims}"
-        ));
+        return Err(ResolutionError::TooFewLayers(dims));
     }
     if dims.ny < dims.nx || dims.ny < dims.nz {
-        return Err(format!(
-            "a cantilever runs along y, so ny must be its longest count (did you mean [{}, {}, {}]?)",
-            dims.nx, dims.nz, dims.ny
-        ));
+        return Err(ResolutionError::NotAlongY(dims));
     }
     Ok(())
 }

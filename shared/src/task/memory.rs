@@ -66,59 +66,32 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
         .ok_or_else(|| format!("{text:?} is not a positive size such as 8G or 512M"))
 }
 
-/// Refuses an evaluation whose estimate exceeds `budget` bytes, saying both.
-pub fn check(scene: &Scene, dims: GridDims, budget: u64) -> Result<(), String> {
+/// An evaluation whose estimated peak memory is over the budget it may use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "a {}x{}x{} evaluation needs about {:.2} GiB, over this worker's budget of {:.2} GiB per evaluation (its memory budget divided by its threads)",
+    .dims.nx, .dims.ny, .dims.nz, gib(*.need), gib(*.budget)
+)]
+pub struct OverBudget {
+    pub dims: GridDims,
+    /// The estimate, bytes.
+    pub need: u64,
+    pub budget: u64,
+}
+
+fn gib(bytes: u64) -> f64 {
+    bytes as f64 / f64::from(1u32 << 30)
+}
+
+/// Refuses an evaluation whose estimate exceeds `budget` bytes.
+pub fn check(scene: &Scene, dims: GridDims, budget: u64) -> Result<(), OverBudget> {
     let need = estimate(scene, dims);
     if need <= budget {
-        return Ok(());
+        Ok(())
+    } else {
+        Err(OverBudget { dims, need, budget })
     }
-    let gib = |b: u64| b as f64 / f64::from(1u32 << 30);
-    Err(format!(
-        "a {}x{}x{} evaluation needs about {:.2} GiB, over this worker's budget of {:.2} GiB per evaluation (its memory budget divided by its threads)",
-        dims.nx,
-        dims.ny,
-        dims.nz,
-        gib(need),
-        gib(budget)
-    ))
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_parse_with_binary_suffixes_and_refuse_nonsense() {
-        assert_eq!(parse_size("8G"), Ok(8 << 30));
-        assert_eq!(parse_size("512m"), Ok(512 << 20));
-        assert_eq!(parse_size("1000"), Ok(1000));
-        for bad in ["", "0", "-1G", "1.5G", "8X", "G", "99999999999T"] {
-            assert!(parse_size(bad).is_err(), "{bad}");
-        }
-    }
-
-    /// A task too large for the memory budget is refused before it starts, rather than making
-    /// the worker try to allocate (13.3 GB for a 1024x1024x8 beam) and abort. The estimate grows
-    /// with the voxel count and refuses it under a budget smaller than what it would ask for,
-    /// while the paper's beam passes a small one.
-    #[test]
-    fn an_evaluation_over_budget_is_refused_before_it_starts() {
-        let beam: Scene = toml::from_str("kind = \"beam\"\ntarget = \"straight\"").unwrap();
-        let huge = GridDims::new(1024, 1024, 8);
-        assert!(
-            estimate(&beam, huge) > 13_300_000_000,
-            "at least what it really asked"
-        );
-        let err = check(&beam, huge, 8 << 30).unwrap_err();
-        assert!(
-            err.contains("1024x1024x8") && err.contains("budget"),
-            "{err}"
-        );
-        assert!(check(&beam, GridDims::new(12, 40, 12), 256 << 20).is_ok());
-        assert_eq!(
-            estimate(&beam, GridDims::new(usize::MAX, usize::MAX, 2)),
-            u64::MAX,
-            "saturates, never wraps"
-        );
-    }
-}
+mod tests;

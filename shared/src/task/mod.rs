@@ -25,7 +25,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 pub use design_space::DesignSpace;
-pub use error::SceneError;
+pub use error::{ImplausibleClaim, ResolutionError, SceneError};
 
 use crate::dynamics::DynamicScene;
 use crate::genome::{Genome, GenomeLimits};
@@ -115,7 +115,7 @@ pub trait Task {
     /// Edge length of one voxel at resolution `dims`, m.
     fn voxel_size(&self, dims: GridDims) -> f64;
     /// Whether the task can be evaluated at `dims` (a reason if not).
-    fn check_dims(&self, dims: GridDims) -> Result<(), String>;
+    fn check_dims(&self, dims: GridDims) -> Result<(), ResolutionError>;
     /// What the task keeps of a voxelized genome (the part it can use).
     fn keep(&self, grid: &VoxelGrid) -> VoxelGrid;
     /// Physics and fitness of a kept design. Every way a design can fail is an outcome.
@@ -129,7 +129,7 @@ pub trait Task {
         fitness: f64,
         metrics: &Self::Metrics,
         dims: GridDims,
-    ) -> Result<(), String>;
+    ) -> Result<(), ImplausibleClaim>;
     /// One line for progress and logs.
     fn headline(&self, metrics: &Self::Metrics) -> String;
     /// The value of [`Task::FIGURE`] for a design.
@@ -183,7 +183,7 @@ fn evaluate_task<T: Task>(task: &T, genome: &Genome, dims: GridDims) -> TaskOutc
         return TaskOutcome::failed(Failure::InvalidGenome(e.to_string()));
     }
     if let Err(reason) = task.check_dims(dims) {
-        return TaskOutcome::failed(Failure::InvalidRequest(reason));
+        return TaskOutcome::failed(Failure::InvalidRequest(reason.to_string()));
     }
     task.simulate(&design(task, genome, dims))
 }
@@ -252,7 +252,7 @@ macro_rules! tasks {
                 match self { $(Scene::$variant(s) => s.voxel_size(dims)),+ }
             }
 
-            pub fn check_dims(&self, dims: GridDims) -> Result<(), String> {
+            pub fn check_dims(&self, dims: GridDims) -> Result<(), ResolutionError> {
                 match self { $(Scene::$variant(s) => s.check_dims(dims)),+ }
             }
 
@@ -290,15 +290,19 @@ macro_rules! tasks {
 
             /// Whether `outcome` is one this scene can produce at `dims` (see
             /// [`Task::check_metrics`]); a failure always is.
-            pub fn check_outcome(&self, outcome: &Outcome, dims: GridDims) -> Result<(), String> {
+            pub fn check_outcome(
+                &self,
+                outcome: &Outcome,
+                dims: GridDims,
+            ) -> Result<(), ImplausibleClaim> {
                 let Outcome::Evaluated { fitness, metrics } = outcome else { return Ok(()) };
                 if !fitness.is_finite() {
-                    return Err(format!("fitness {fitness} is not finite"));
+                    return Err(error::implausible!("fitness {fitness} is not finite"));
                 }
                 match (self, metrics) {
                     $((Scene::$variant(s), Metrics::$variant(m)) => s.check_metrics(*fitness, m, dims),)+
                     #[allow(unreachable_patterns)]
-                    _ => Err(format!("metrics of another task for a {} scene", self.kind())),
+                    _ => Err(error::implausible!("metrics of another task for a {} scene", self.kind())),
                 }
             }
 

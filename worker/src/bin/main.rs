@@ -163,8 +163,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     match command {
         Command::Evaluate { design } => {
             let (genome, scene, dims) = design.load()?;
-            amorph::task::memory::check(&scene, dims, amorph::task::memory::default_budget())
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            amorph::task::memory::check(&scene, dims, amorph::task::memory::default_budget())?;
             let outcome = design.threads()?.run(|| scene.evaluate(&genome, dims));
             print(&serde_json::to_string_pretty(&outcome).context("serialising the outcome")?)?;
         }

@@ -234,6 +234,7 @@ impl Worker {
             .and_then(|(genome, dims, scene)| {
                 amorph::task::memory::check(&scene, dims, self.evaluation_budget)
                     .map(|()| (genome, dims, scene))
+                    .map_err(|e| e.to_string())
             });
         match converted {
             Ok((genome, dims, scene)) => {

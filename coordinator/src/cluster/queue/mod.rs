@@ -36,8 +36,10 @@ mod task;
 mod worker_calls;
 
 #[cfg(test)]
+#[path = "tests/principals.rs"]
 mod principals;
 #[cfg(test)]
+#[path = "tests/properties.rs"]
 mod properties;
 #[cfg(test)]
 mod tests;

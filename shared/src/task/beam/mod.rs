@@ -15,7 +15,8 @@ pub use target::{NamedProfile, TargetProfile};
 
 use super::cantilever::check_cantilever_dims;
 use super::{
-    Artefact, DesignSpace, Figure, LayerLoadCase, SceneError, SimulatorSettings, Task, TaskOutcome,
+    Artefact, DesignSpace, Figure, ImplausibleClaim, LayerLoadCase, ResolutionError, SceneError,
+    SimulatorSettings, Task, TaskOutcome,
 };
 use crate::dynamics::DynamicScene;
 use crate::genome::Genome;
@@ -60,7 +61,7 @@ impl Task for BeamScene {
         self.length / dims.ny as f64
     }
 
-    fn check_dims(&self, dims: GridDims) -> Result<(), String> {
+    fn check_dims(&self, dims: GridDims) -> Result<(), ResolutionError> {
         check_cantilever_dims(dims)
     }
 
@@ -78,7 +79,7 @@ impl Task for BeamScene {
         fitness: f64,
         metrics: &BeamMetrics,
         dims: GridDims,
-    ) -> Result<(), String> {
+    ) -> Result<(), ImplausibleClaim> {
         report::check_metrics(self, fitness, metrics, dims)
     }
 

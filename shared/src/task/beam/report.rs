@@ -6,7 +6,7 @@ use std::path::Path;
 use super::scene::{BeamMetrics, BeamScene};
 use crate::report::{Block, PlotSpec, Series, line_plot};
 use crate::task::Artefact;
-use crate::task::error::counts_fit;
+use crate::task::error::{ImplausibleClaim, counts_fit, implausible};
 use crate::voxel::GridDims;
 
 fn percent(v: Option<f64>) -> String {
@@ -101,37 +101,39 @@ pub(super) fn check_metrics(
     fitness: f64,
     m: &BeamMetrics,
     dims: GridDims,
-) -> Result<(), String> {
+) -> Result<(), ImplausibleClaim> {
     counts_fit(m.voxels, &m.material_counts, scene.palette.len(), dims)?;
     if m.surface_voxels > dims.nx * dims.ny {
-        return Err(format!(
+        return Err(implausible!(
             "surface_voxels = {} exceeds the {} columns",
             m.surface_voxels,
             dims.nx * dims.ny
         ));
     }
     if !(m.tip_deflection.is_finite() && m.tip_deflection > 0.0) {
-        return Err(format!(
+        return Err(implausible!(
             "tip_deflection = {} is not a downward deflection",
             m.tip_deflection
         ));
     }
     if !(m.solver_residual.is_finite() && m.solver_residual >= 0.0) {
-        return Err(format!(
+        return Err(implausible!(
             "solver_residual = {} is not a residual",
             m.solver_residual
         ));
     }
     let stations = &m.profile;
     if stations.len() < 2 || stations.len() > dims.ny {
-        return Err(format!(
+        return Err(implausible!(
             "profile has {} stations, expected 2..={} at {dims}",
             stations.len(),
             dims.ny
         ));
     }
     if stations[0] != [0.0, 0.0, 0.0] {
-        return Err("profile must start at the clamp, [0, 0, 0]".into());
+        return Err(ImplausibleClaim(
+            "profile must start at the clamp, [0, 0, 0]".into(),
+        ));
     }
     let tip_y = (dims.ny - 1) as f64;
     let mut last = 0.0;
@@ -139,7 +141,7 @@ pub(super) fn check_metrics(
     for (i, &[t, w, target]) in stations.iter().enumerate().skip(1) {
         let layer = t * tip_y;
         if !(t > last && t <= 1.0 && (layer - layer.round()).abs() < 1e-9) {
-            return Err(format!(
+            return Err(implausible!(
                 "profile[{i}]: station t = {t} is not a layer after {last} in (0, 1]"
             ));
         }
@@ -147,13 +149,13 @@ pub(super) fn check_metrics(
         // is finite and bounded by what a 1000:1 palette can bend (any finite value is a
         // physically possible mean only within the section's rotation, so bound it loosely).
         if !(w.is_finite() && w.abs() <= 1e6) {
-            return Err(format!(
+            return Err(implausible!(
                 "profile[{i}]: deflection {w} is not a normalized deflection"
             ));
         }
         let expected = scene.target.deflection(t);
         if target.to_bits() != expected.to_bits() {
-            return Err(format!(
+            return Err(implausible!(
                 "profile[{i}]: target {target} differs from this scene's {expected} at t = {t}"
             ));
         }
@@ -161,18 +163,20 @@ pub(super) fn check_metrics(
         last = t;
     }
     if (last - 1.0).abs() > 0.0 {
-        return Err("profile must end at the tip, t = 1".into());
+        return Err(ImplausibleClaim(
+            "profile must end at the tip, t = 1".into(),
+        ));
     }
     // The evaluation sums the same squares in the same order, so its fitness is this to the bit.
     if fitness.to_bits() != (-sum_sq).to_bits() {
-        return Err(format!(
+        return Err(implausible!(
             "fitness {fitness} differs from the profile's {}",
             -sum_sq
         ));
     }
     let rms = 100.0 * (sum_sq / (stations.len() - 1) as f64).sqrt();
     if !(rms.is_finite() && (rms - m.rms_percent).abs() <= 1e-9 * rms.max(1.0)) {
-        return Err(format!(
+        return Err(implausible!(
             "rms_percent = {} differs from the profile's {rms}",
             m.rms_percent
         ));

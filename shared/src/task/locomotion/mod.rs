@@ -22,7 +22,10 @@ pub use scene::{LocomotionMetrics, LocomotionScene};
 pub use starts::Starts;
 pub use trajectory::{trajectory_csv, trajectory_plot};
 
-use super::{Artefact, DesignSpace, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use super::{
+    Artefact, DesignSpace, Figure, ImplausibleClaim, ResolutionError, SceneError,
+    SimulatorSettings, Task, TaskOutcome,
+};
 use crate::genome::Genome;
 use crate::outcome::Failure;
 use crate::report::Block;
@@ -57,7 +60,7 @@ impl Task for LocomotionScene {
         self.dynamics_at(dims).voxel_size
     }
 
-    fn check_dims(&self, _dims: GridDims) -> Result<(), String> {
+    fn check_dims(&self, _dims: GridDims) -> Result<(), ResolutionError> {
         Ok(())
     }
 
@@ -92,10 +95,9 @@ impl Task for LocomotionScene {
             LocomotionStatus::Invalid { message } => {
                 TaskOutcome::failed(Failure::InvalidRequest(message))
             }
-            LocomotionStatus::Diverged { reason, time } => TaskOutcome::failed(Failure::Diverged {
-                reason: reason.to_string(),
-                time,
-            }),
+            LocomotionStatus::Diverged { reason, time } => {
+                TaskOutcome::failed(Failure::Diverged { reason, time })
+            }
         }
     }
 
@@ -104,7 +106,7 @@ impl Task for LocomotionScene {
         fitness: f64,
         metrics: &LocomotionMetrics,
         dims: GridDims,
-    ) -> Result<(), String> {
+    ) -> Result<(), ImplausibleClaim> {
         report::check_metrics(self, fitness, metrics, dims)
     }
 

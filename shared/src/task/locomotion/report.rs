@@ -12,7 +12,7 @@ use super::trajectory::{trajectory_csv, trajectory_plot};
 use crate::genome::Genome;
 use crate::report::Block;
 use crate::task::Artefact;
-use crate::task::error::counts_fit;
+use crate::task::error::{ImplausibleClaim, counts_fit, implausible};
 use crate::voxel::GridDims;
 
 /// The paper's simulated robot's speed, % of body length per actuation cycle (Table IV).
@@ -188,7 +188,7 @@ pub(super) fn check_metrics(
     fitness: f64,
     m: &LocomotionMetrics,
     dims: GridDims,
-) -> Result<(), String> {
+) -> Result<(), ImplausibleClaim> {
     counts_fit(m.voxels, &m.material_counts, scene.palette.len(), dims)?;
     let dynamics = scene.dynamics_at(dims);
     let s = dynamics.voxel_size;
@@ -196,13 +196,13 @@ pub(super) fn check_metrics(
         if v.is_finite() && v > 0.0 {
             Ok(())
         } else {
-            Err(format!("{name} = {v} must be positive"))
+            Err(implausible!("{name} = {v} must be positive"))
         }
     };
     positive("dt", m.dt)?;
     positive("simulated_time", m.simulated_time)?;
     if !(m.settle_time.is_finite() && (0.0..=m.simulated_time).contains(&m.settle_time)) {
-        return Err(format!(
+        return Err(implausible!(
             "settle_time = {} outside the simulated time",
             m.settle_time
         ));
@@ -212,21 +212,23 @@ pub(super) fn check_metrics(
             .abs()
             .le(&(1e-6 * m.simulated_time))
     {
-        return Err(format!(
+        return Err(implausible!(
             "steps = {} at dt = {} do not make simulated_time = {}",
-            m.steps, m.dt, m.simulated_time
+            m.steps,
+            m.dt,
+            m.simulated_time
         ));
     }
     let longest = dims.nx.max(dims.ny).max(dims.nz) as f64 * s;
     if !(m.body_length > 0.0 && m.body_length <= longest * 2f64.sqrt() + s) {
-        return Err(format!(
+        return Err(implausible!(
             "body_length = {} m does not fit the workspace",
             m.body_length
         ));
     }
     let trace = &m.centre_of_mass_trace;
     if trace.len() != scene.actuation_cycles as usize + 1 {
-        return Err(format!(
+        return Err(implausible!(
             "centre_of_mass_trace has {} points, expected {} (settled, then each cycle)",
             trace.len(),
             scene.actuation_cycles + 1
@@ -235,7 +237,7 @@ pub(super) fn check_metrics(
     let reach = dynamics.divergence.max_step_travel * s * m.steps as f64 + longest;
     for (i, c) in trace.iter().enumerate() {
         if c.iter().any(|v| !(v.is_finite() && v.abs() <= reach)) {
-            return Err(format!(
+            return Err(implausible!(
                 "centre_of_mass_trace[{i}] = {c:?} is beyond what {} steps can reach",
                 m.steps
             ));
@@ -244,14 +246,15 @@ pub(super) fn check_metrics(
     let protocol = scene.protocol();
     let (along, lateral) = protocol.travel(trace[0], trace[trace.len() - 1]);
     if along.to_bits() != m.displacement.to_bits() || lateral.to_bits() != m.lateral.to_bits() {
-        return Err(format!(
+        return Err(implausible!(
             "displacement {} and lateral {} differ from the trace's {along} and {lateral}",
-            m.displacement, m.lateral
+            m.displacement,
+            m.lateral
         ));
     }
     let gait = protocol.score(trace);
     if gait.to_bits() != m.gait_displacement.to_bits() || fitness.to_bits() != gait.to_bits() {
-        return Err(format!(
+        return Err(implausible!(
             "fitness {fitness} and gait_displacement {} differ from the trace's {gait}",
             m.gait_displacement
         ));
@@ -264,7 +267,7 @@ pub(super) fn check_metrics(
     )?;
     let speed = protocol.speed_percent_per_cycle(gait, m.body_length);
     if speed.to_bits() != m.speed_percent_per_cycle.to_bits() {
-        return Err(format!(
+        return Err(implausible!(
             "speed_percent_per_cycle {} differs from {speed}",
             m.speed_percent_per_cycle
         ));
@@ -279,11 +282,11 @@ fn check_starts(
     m: &LocomotionMetrics,
     gait: f64,
     reach: f64,
-) -> Result<(), String> {
+) -> Result<(), ImplausibleClaim> {
     let starts = scene.starts.count as usize;
     let expected = if starts > 1 { starts } else { 0 };
     if m.start_fitness.len() != expected {
-        return Err(format!(
+        return Err(implausible!(
             "start_fitness has {} values, expected {expected} (one per start of {starts}, none \
              for a single start)",
             m.start_fitness.len()
@@ -297,14 +300,14 @@ fn check_starts(
         .iter()
         .find(|f| !(f.is_finite() && f.abs() <= reach))
     {
-        return Err(format!(
+        return Err(implausible!(
             "start_fitness value {f} is beyond what {} steps can reach",
             m.steps
         ));
     }
     let median = m.start_fitness[Starts::median_start(&m.start_fitness)];
     if median.to_bits() != gait.to_bits() {
-        return Err(format!(
+        return Err(implausible!(
             "the median of start_fitness, {median}, is not the scored start's gait {gait}"
         ));
     }

@@ -13,7 +13,10 @@ pub use evaluate::simulate_stiffness;
 pub use scene::{StiffnessMetrics, StiffnessScene};
 
 use super::cantilever::check_cantilever_dims;
-use super::{Artefact, DesignSpace, Figure, SceneError, SimulatorSettings, Task, TaskOutcome};
+use super::{
+    Artefact, DesignSpace, Figure, ImplausibleClaim, ResolutionError, SceneError,
+    SimulatorSettings, Task, TaskOutcome,
+};
 use crate::genome::Genome;
 use crate::report::Block;
 use crate::voxel::{GridDims, VoxelGrid, keep_connected_to_base};
@@ -47,7 +50,7 @@ impl Task for StiffnessScene {
     }
 
     /// The same cantilever as the beam designer's.
-    fn check_dims(&self, dims: GridDims) -> Result<(), String> {
+    fn check_dims(&self, dims: GridDims) -> Result<(), ResolutionError> {
         check_cantilever_dims(dims)
     }
 
@@ -64,7 +67,7 @@ impl Task for StiffnessScene {
         fitness: f64,
         metrics: &StiffnessMetrics,
         dims: GridDims,
-    ) -> Result<(), String> {
+    ) -> Result<(), ImplausibleClaim> {
         report::check_metrics(self, fitness, metrics, dims)
     }
 

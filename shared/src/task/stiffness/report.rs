@@ -3,7 +3,7 @@
 use super::evaluate::{fitness, reference_deflection};
 use super::scene::{StiffnessMetrics, StiffnessScene};
 use crate::report::Block;
-use crate::task::error::counts_fit;
+use crate::task::error::{ImplausibleClaim, counts_fit, implausible};
 use crate::voxel::GridDims;
 
 pub(super) fn summary(scene: &StiffnessScene, m: Option<&StiffnessMetrics>) -> serde_json::Value {
@@ -70,10 +70,10 @@ pub(super) fn check_metrics(
     fitness_claimed: f64,
     m: &StiffnessMetrics,
     dims: GridDims,
-) -> Result<(), String> {
+) -> Result<(), ImplausibleClaim> {
     counts_fit(m.voxels, &m.material_counts, scene.palette.len(), dims)?;
     if !(m.tip_deflection.is_finite() && m.tip_deflection > 0.0) {
-        return Err(format!(
+        return Err(implausible!(
             "tip_deflection = {} is not a downward deflection",
             m.tip_deflection
         ));
@@ -86,7 +86,7 @@ pub(super) fn check_metrics(
         ..m.clone()
     };
     if expected != *m {
-        return Err(format!(
+        return Err(implausible!(
             "relative_stiffness, hard_fraction or within_budget differ from the counts' {:?}",
             (
                 expected.relative_stiffness,
@@ -96,13 +96,13 @@ pub(super) fn check_metrics(
         ));
     }
     if !(m.flange_efficiency.is_finite() && m.flange_efficiency >= 0.0) {
-        return Err(format!(
+        return Err(implausible!(
             "flange_efficiency = {} is not a ratio",
             m.flange_efficiency
         ));
     }
     if fitness_claimed.to_bits() != fitness(m, scene).to_bits() {
-        return Err(format!(
+        return Err(implausible!(
             "fitness {fitness_claimed} differs from the metrics' {}",
             fitness(m, scene)
         ));
