@@ -1,12 +1,77 @@
-//! Every `coordinator` command the README and the docs show still works: each one, run from the
-//! repository root with `--check` added, reads and validates its config, `--set`s and preset.
-//! A renamed key, flag or config file in the docs fails here instead of in a user's terminal.
+//! Every `coordinator` and `worker` command the README and the docs show still works. A
+//! coordinator command, run from the repository root with `--check` added, reads and validates its
+//! config, `--set`s and preset (a `credentials` command runs for real, in a folder of its own); a
+//! `worker export` or `worker evaluate` command runs as written on a finished run of the name it
+//! reads. A renamed key, flag or config file in the docs fails here instead of in a user's
+//! terminal.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use amorph_tests::{binary, run_locally, scratch_dir, test_config};
+
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// A documented `cargo run [--release] --bin NAME -- ARGS` command: the binary's name and its
+/// arguments.
+struct CargoRun {
+    page: PathBuf,
+    command: String,
+    bin: String,
+    args: Vec<String>,
+}
+
+/// Every `cargo run` command in the fenced shell blocks of the README and docs/.
+fn documented_runs() -> Vec<CargoRun> {
+    let mut runs = Vec::new();
+    for page in pages() {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for command in shell_commands(&text) {
+            let words = words(&command);
+            let Some(at) = words.windows(4).position(|w| {
+                w == ["cargo", "run", "--release", "--bin"] || w[..3] == ["cargo", "run", "--bin"]
+            }) else {
+                continue;
+            };
+            let rest = &words[at..];
+            let Some(bin) = rest
+                .iter()
+                .position(|w| w == "--bin")
+                .map(|i| rest[i + 1].clone())
+            else {
+                continue;
+            };
+            let args = match rest.iter().position(|w| w == "--") {
+                Some(i) => rest[i + 1..].to_vec(),
+                None => Vec::new(),
+            };
+            runs.push(CargoRun {
+                page: page.clone(),
+                command: command.clone(),
+                bin,
+                args,
+            });
+        }
+    }
+    runs
+}
+
+impl CargoRun {
+    fn failure(&self, out: &std::process::Output) -> Option<String> {
+        (!out.status.success()).then(|| {
+            format!(
+                "{}: `{}`: {}",
+                self.page
+                    .strip_prefix(root())
+                    .unwrap_or(&self.page)
+                    .display(),
+                self.command,
+                String::from_utf8_lossy(&out.stderr).trim()
+            )
+        })
+    }
 }
 
 /// The Markdown files a user reads: the README and everything under docs/.
@@ -89,59 +154,83 @@ fn words(command: &str) -> Vec<String> {
 
 #[test]
 fn every_documented_coordinator_command_checks() {
-    let scratch = std::env::temp_dir().join(format!("amorph-doc-commands-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&scratch);
-    std::fs::create_dir_all(&scratch).unwrap();
+    let scratch = scratch_dir("doc-credentials");
     let mut checked = 0;
     let mut failed = Vec::new();
-    for page in pages() {
-        let text = std::fs::read_to_string(&page).unwrap();
-        for command in shell_commands(&text) {
-            let words = words(&command);
-            let Some(at) = words.windows(4).position(|w| {
-                w == ["cargo", "run", "--release", "--bin"] || w[..3] == ["cargo", "run", "--bin"]
-            }) else {
-                continue;
-            };
-            let rest = &words[at..];
-            let bin = rest.iter().position(|w| w == "--bin").map(|i| &rest[i + 1]);
-            if bin.is_none_or(|b| b != "coordinator") {
-                continue;
-            }
-            let args: Vec<&String> = match rest.iter().position(|w| w == "--") {
-                Some(i) => rest[i + 1..].iter().collect(),
-                None => Vec::new(),
-            };
-            // `credentials` commands write files, so they run for real in a folder of their own;
-            // every other command only checks its config.
-            let out = if args.first().is_some_and(|a| *a == "credentials") {
-                Command::new(env!("CARGO_BIN_EXE_coordinator"))
-                    .args(&args)
-                    .current_dir(&scratch)
-                    .output()
-                    .unwrap()
-            } else {
-                Command::new(env!("CARGO_BIN_EXE_coordinator"))
-                    .args(&args)
-                    .arg("--check")
-                    .current_dir(root())
-                    .env("AMORPH_TOKEN", "documentation")
-                    .output()
-                    .unwrap()
-            };
-            checked += 1;
-            if !out.status.success() {
-                failed.push(format!(
-                    "{}: `{command}`: {}",
-                    page.strip_prefix(root()).unwrap_or(&page).display(),
-                    String::from_utf8_lossy(&out.stderr).trim()
-                ));
-            }
-        }
+    for run in documented_runs().iter().filter(|r| r.bin == "coordinator") {
+        // `credentials` commands write files, so they run for real in a folder of their own;
+        // every other command only checks its config.
+        let out = if run.args.first().is_some_and(|a| a == "credentials") {
+            Command::new(binary("coordinator"))
+                .args(&run.args)
+                .current_dir(&scratch)
+                .output()
+                .unwrap()
+        } else {
+            Command::new(binary("coordinator"))
+                .args(&run.args)
+                .arg("--check")
+                .current_dir(root())
+                .env("AMORPH_TOKEN", "documentation")
+                .output()
+                .unwrap()
+        };
+        checked += 1;
+        failed.extend(run.failure(&out));
     }
     assert!(
         checked >= 10,
         "only {checked} coordinator commands found in the docs"
+    );
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+/// `worker export` and `worker evaluate` as the docs write them, in a folder holding a finished
+/// run (a small beam, 40 evaluations at 4x12x4) under each `results/<name>/` they read.
+#[test]
+fn every_documented_worker_export_and_evaluate_runs() {
+    let scratch = scratch_dir("doc-worker");
+    let runs: Vec<CargoRun> = documented_runs()
+        .into_iter()
+        .filter(|r| {
+            r.bin == "worker"
+                && r.args
+                    .first()
+                    .is_some_and(|a| a == "export" || a == "evaluate")
+        })
+        .collect();
+    let mut names: Vec<String> = (runs.iter())
+        .flat_map(|r| r.args.iter())
+        .filter_map(|a| {
+            a.strip_prefix("results/")?
+                .split('/')
+                .next()
+                .map(str::to_owned)
+        })
+        .collect();
+    names.sort();
+    names.dedup();
+    for name in &names {
+        let config = test_config(
+            "small_beam",
+            &scratch.join("results"),
+            &[&format!("name={name}"), "budget.evaluations=40"],
+        );
+        run_locally(&config, 2);
+    }
+    let mut failed = Vec::new();
+    for run in &runs {
+        let out = Command::new(binary("worker"))
+            .args(&run.args)
+            .current_dir(&scratch)
+            .output()
+            .unwrap();
+        failed.extend(run.failure(&out));
+    }
+    assert!(
+        runs.len() >= 2 && !names.is_empty(),
+        "only {} worker export/evaluate commands found in the docs",
+        runs.len()
     );
     assert!(failed.is_empty(), "{failed:#?}");
 }
