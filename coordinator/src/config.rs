@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
 use crate::cluster::settings::ClusterSettings;
-use crate::search::{LocalSearchParams, MigrationParams, ResolutionSchedule};
+use crate::search::{LocalSearchParams, MigrationParams, ResolutionSchedule, Selection};
 pub use export::ExportSection;
 
 #[derive(Debug, thiserror::Error)]
@@ -93,6 +93,17 @@ pub struct SearchSection {
     pub migration: MigrationParams,
     /// Nudges of the best design (off in the paper's search).
     pub local_search: LocalSearchParams,
+    /// The task's objectives a run trades off (names from `Scene::objectives`); none: the task's
+    /// single fitness.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub objectives: Vec<String>,
+    /// How an island of a multi-objective run keeps its population.
+    #[serde(skip_serializing_if = "Selection::is_crowding")]
+    pub selection: Selection,
+    /// The point the hypervolume is measured from, one value per objective in the task's units:
+    /// a design counts only where it is better than it in every objective.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub hypervolume_reference: Vec<f64>,
 }
 
 impl Default for SearchSection {
@@ -107,6 +118,9 @@ impl Default for SearchSection {
             mutation: MutationParams::default(),
             migration: MigrationParams::default(),
             local_search: LocalSearchParams::default(),
+            objectives: Vec::new(),
+            selection: Selection::Crowding,
+            hypervolume_reference: Vec::new(),
         }
     }
 }
@@ -206,9 +220,12 @@ impl RunConfig {
         // its preset and scene kind read without another pass through the whole config.
         let preset = match document.get("search").and_then(|s| s.get("preset")) {
             Some(named) => named.clone().try_into().expect("checked above"),
-            None => Preset::for_scene_kind(
+            None => Preset::for_run(
                 (document["scene"].get("kind").and_then(toml::Value::as_str))
                     .expect("checked above"),
+                (document.get("search").and_then(|s| s.get("objectives")))
+                    .and_then(toml::Value::as_array)
+                    .is_some_and(|o| !o.is_empty()),
             ),
         };
         preset::lay_under(&mut document, preset.defaults());
@@ -338,6 +355,7 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
         return Err("search.migration.topology.probability must be in [0, 1]".into());
     }
     s.local_search.validate()?;
+    validate_objectives(raw)?;
     let b = &raw.budget;
     if b.evaluations.is_none() && b.wall_seconds.is_none() && b.target_rms_percent.is_none() {
         return Err(
@@ -377,6 +395,55 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
         raw.scene
             .check_dims(amorph::voxel::GridDims::new(nx, ny, nz))
             .map_err(|e| format!("resolution.levels[{i}] = [{nx}, {ny}, {nz}]: {e}"))?;
+    }
+    Ok(())
+}
+
+/// The multi-objective keys: two or more of the task's objectives, once each, a reference point
+/// with a finite value for each, and a search the objectives can drive (the climb and a stop
+/// target judge the single fitness).
+fn validate_objectives(raw: &RawConfig) -> std::result::Result<(), String> {
+    let s = &raw.search;
+    if s.objectives.is_empty() {
+        if s.selection != Selection::Crowding {
+            return Err("search.selection = \"nsga2\" needs search.objectives".into());
+        }
+        if !s.hypervolume_reference.is_empty() {
+            return Err("search.hypervolume_reference needs search.objectives".into());
+        }
+        return Ok(());
+    }
+    let known: Vec<&str> = raw.scene.objectives().iter().map(|o| o.name).collect();
+    for (i, name) in s.objectives.iter().enumerate() {
+        if !known.contains(&name.as_str()) {
+            return Err(format!(
+                "search.objectives[{i}] = {name:?} is not an objective of a {} scene; it has {}",
+                raw.scene.kind(),
+                known.join(", ")
+            ));
+        }
+        if s.objectives[..i].contains(name) {
+            return Err(format!("search.objectives[{i}] = {name:?} is named twice"));
+        }
+    }
+    if s.objectives.len() < 2 {
+        return Err("search.objectives needs two or more objectives to trade off".into());
+    }
+    if s.hypervolume_reference.len() != s.objectives.len()
+        || s.hypervolume_reference.iter().any(|v| !v.is_finite())
+    {
+        return Err(format!(
+            "search.hypervolume_reference must hold one finite number per objective ({})",
+            s.objectives.len()
+        ));
+    }
+    if s.local_search.fraction > 0.0 {
+        return Err(
+            "search.local_search.fraction must be 0 with search.objectives: the climb follows the single fitness".into(),
+        );
+    }
+    if raw.budget.target_rms_percent.is_some() {
+        return Err("budget.target_rms_percent cannot stop a run with search.objectives".into());
     }
     Ok(())
 }

@@ -4,7 +4,7 @@
 use amorph::voxel::GridDims;
 use serde::Serialize;
 
-use crate::search::Individual;
+use crate::search::{Front, Individual};
 
 /// Why a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -29,6 +29,8 @@ pub struct HistoryRow {
     pub best_figure: Option<f64>,
     pub mean_fitness: Option<f64>,
     pub replacements: usize,
+    /// In a multi-objective run: the hypervolume the island's population dominates.
+    pub hypervolume: Option<f64>,
 }
 
 /// What a finished run hands back (and writes to its results folder).
@@ -45,6 +47,8 @@ pub struct RunSummary {
     /// Every island's final population, in slot order.
     pub populations: Vec<Vec<Individual>>,
     pub history: Vec<HistoryRow>,
+    /// In a multi-objective run: its non-dominated designs at the final resolution.
+    pub pareto: Option<Front>,
 }
 
 impl RunSummary {

@@ -59,10 +59,11 @@ stall_on_finest = false
 "#;
 
 impl Preset {
-    /// The preset a config gets when it names none: the climb for beams, where it was measured,
-    /// the paper's search for every other task.
-    pub fn for_scene_kind(kind: &str) -> Self {
-        if kind == "beam" {
+    /// The preset a config gets when it names none: the climb for single-objective beams, where
+    /// it was measured, the paper's search for every other task and for any run with several
+    /// objectives (the climb follows one fitness).
+    pub fn for_run(kind: &str, multi_objective: bool) -> Self {
+        if kind == "beam" && !multi_objective {
             Preset::Climb
         } else {
             Preset::Paper

@@ -11,7 +11,7 @@ use super::finishing::FinerCheck;
 use super::plots::write_progress;
 use super::report::{ReportInputs, run_report, summary_markdown};
 use crate::config::RunConfig;
-use crate::search::Individual;
+use crate::search::{Front, Individual};
 use crate::summary::{HistoryRow, RunSummary, StopReason, fittest};
 
 /// Samples along the longest side for the smooth surface STL written at the end of a run: three
@@ -45,8 +45,13 @@ impl ResultWriter {
         let mut history = BufWriter::new(File::create(dir.join("history.csv"))?);
         writeln!(
             history,
-            "epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_{},mean_fitness,replacements",
-            config.scene.figure_spec().column
+            "epoch,evaluations,wall_seconds,resolution,island,best_fitness,best_{},mean_fitness,replacements{}",
+            config.scene.figure_spec().column,
+            if config.search.objectives.is_empty() {
+                ""
+            } else {
+                ",hypervolume"
+            }
         )?;
         Ok(Self {
             dir,
@@ -64,7 +69,7 @@ impl ResultWriter {
 
     pub fn history(&mut self, row: &HistoryRow) -> std::io::Result<()> {
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
-        writeln!(
+        write!(
             self.history,
             "{},{},{:.3},{},{},{},{},{},{}",
             row.epoch,
@@ -77,6 +82,10 @@ impl ResultWriter {
             opt(row.mean_fitness),
             row.replacements
         )?;
+        if let Some(hypervolume) = row.hypervolume {
+            write!(self.history, ",{hypervolume:e}")?;
+        }
+        writeln!(self.history)?;
         self.history.flush()
     }
 
@@ -131,6 +140,9 @@ impl ResultWriter {
             })
             .collect();
         write_json(&self.dir.join("population.json"), &populations)?;
+        if let Some(front) = &summary.pareto {
+            write_front(&self.dir.join("pareto.csv"), front)?;
+        }
 
         let grid = scene.design(&best.genome, summary.dims);
         write_json(
@@ -277,4 +289,19 @@ fn voxels_json(grid: &VoxelGrid, scene: &Scene) -> serde_json::Value {
 fn write_json(path: &std::path::Path, value: &impl Serialize) -> std::io::Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(std::io::Error::other)?;
     std::fs::write(path, text)
+}
+
+/// `pareto.csv`: a row per non-dominated design, ordered by the first objective (then by
+/// evaluation), its evaluation id (`task_id` in the run store) and its objectives' values.
+fn write_front(path: &std::path::Path, front: &Front) -> std::io::Result<()> {
+    let mut out = BufWriter::new(File::create(path)?);
+    let names: Vec<&str> = front.objectives.iter().map(|o| o.name).collect();
+    writeln!(out, "task_id,{}", names.join(","))?;
+    let mut rows: Vec<&(crate::ids::TaskId, Vec<f64>)> = front.members.iter().collect();
+    rows.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]).then(a.0.cmp(&b.0)));
+    for (task, values) in rows {
+        let values: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
+        writeln!(out, "{},{}", task.0, values.join(","))?;
+    }
+    out.flush()
 }

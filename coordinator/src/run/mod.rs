@@ -120,6 +120,22 @@ pub fn run(
     };
 
     let dims = schedule.dims(search.resolution.level);
+    // The front is of every design evaluated (and checked) at the final resolution, from the
+    // store: a resumed run's earlier sessions count too.
+    let pareto = match search.islands[0].pareto() {
+        Some(pareto) => {
+            let stored = ctx.store.evaluations()?;
+            let level = dims.to_string();
+            Some(
+                pareto.front(
+                    (stored.iter())
+                        .filter(|(_, e)| e.resolution == level && !e.unchecked)
+                        .map(|(task, e)| (*task, &e.outcome)),
+                ),
+            )
+        }
+        None => None,
+    };
     let summary = RunSummary {
         stop,
         epochs: search.ledger.epoch,
@@ -129,6 +145,7 @@ pub fn run(
         dims,
         populations: search.islands.into_iter().map(|i| i.population).collect(),
         history,
+        pareto,
     };
     writer.finish(&summary, &scene)?;
     ctx.progress.finish(&summary);

@@ -21,8 +21,8 @@ use crate::config::RunConfig;
 use crate::evaluator::Evaluator;
 use crate::ids::IslandId;
 use crate::search::{
-    Breeding, Child, Individual, Island, ParentDesigns, ResolutionState, SharedBest, first_in_turn,
-    keep_at_least_one, migrate,
+    Breeding, Child, Individual, Island, ParentDesigns, Pareto, ResolutionState, SharedBest,
+    first_in_turn, keep_at_least_one, migrate,
 };
 use crate::store::{MigrationRecord, Purpose};
 use crate::summary::fittest;
@@ -144,6 +144,16 @@ impl Search {
         };
         search.breed_for_level(config);
         let dims = config.resolution.dims(0);
+        let objectives = &config.search.objectives;
+        let pareto = (!objectives.is_empty()).then(|| {
+            Pareto::new(
+                search.breeding.scene.clone(),
+                objectives,
+                config.search.selection,
+                &config.search.hypervolume_reference,
+                dims,
+            )
+        });
         let outcomes = evaluate_settled(
             &mut search.ledger,
             evaluator,
@@ -168,6 +178,7 @@ impl Search {
                     })
                     .collect();
                 Island::from_evaluated(IslandId(i as u32), rng, population)
+                    .with_pareto(pareto.clone())
             })
             .collect();
         Ok(search)
@@ -372,6 +383,20 @@ impl Search {
 
     pub(super) fn best(&self) -> &Individual {
         fittest(self.islands.iter().map(|i| i.best()))
+    }
+
+    /// What the stall rule watches, larger being better: the best fitness, or in a
+    /// multi-objective run the hypervolume of all islands' populations together.
+    pub(super) fn progress(&self) -> f64 {
+        match self.islands[0].pareto() {
+            Some(pareto) => {
+                let outcomes: Vec<&Outcome> = (self.islands.iter())
+                    .flat_map(|i| i.population.iter().map(|m| &m.outcome))
+                    .collect();
+                pareto.hypervolume(&outcomes)
+            }
+            None => self.best().outcome.rank(),
+        }
     }
 }
 

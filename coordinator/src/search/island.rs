@@ -17,6 +17,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::combination::combine;
 use super::insertion::BoundarySite;
+use super::objectives::{Pareto, Selection};
 use super::variation::LocalSearchParams;
 use crate::ids::{IslandId, TaskId};
 
@@ -68,6 +69,9 @@ pub struct Island {
     rng: ChaCha8Rng,
     /// The last epoch's improving nudges applied together, offered as the first nudge of the next.
     combination: Option<Genome>,
+    /// A multi-objective run's objectives: members then stand by Pareto front and crowding
+    /// instead of by fitness.
+    pareto: Option<Pareto>,
 }
 
 impl Island {
@@ -97,7 +101,25 @@ impl Island {
             population,
             rng,
             combination: None,
+            pareto: None,
         }
+    }
+
+    /// Makes the island keep its population by `pareto`'s objectives (a multi-objective run).
+    pub fn with_pareto(mut self, pareto: Option<Pareto>) -> Self {
+        self.pareto = pareto;
+        self
+    }
+
+    /// The resolution the population is now evaluated at (after a switch).
+    pub fn at_resolution(&mut self, dims: GridDims) {
+        if let Some(pareto) = &mut self.pareto {
+            pareto.dims = dims;
+        }
+    }
+
+    fn outcomes(&self) -> Vec<&Outcome> {
+        self.population.iter().map(|i| &i.outcome).collect()
     }
 
     /// Breeds `count` children from the current snapshot: two distinct random parents, a cut
@@ -163,12 +185,31 @@ impl Island {
 
     fn crossover_child(&mut self, breeding: &Breeding) -> Child {
         let n = self.population.len();
-        let a = self.rng.random_range(0..n);
-        let b = if n > 1 {
-            let b = self.rng.random_range(0..n - 1);
-            if b >= a { b + 1 } else { b }
-        } else {
-            a
+        let (a, b) = match &self.pareto {
+            Some(pareto) if pareto.selection == Selection::Nsga2 => {
+                // Binary tournaments on standing (the lower slot on a tie), as NSGA-II breeds.
+                let standings = pareto.standings(&self.outcomes());
+                let mut tournament = || {
+                    let (x, y) = (self.rng.random_range(0..n), self.rng.random_range(0..n));
+                    let better = super::objectives::stands_better(standings[y], standings[x]);
+                    if better || (standings[y] == standings[x] && y < x) {
+                        y
+                    } else {
+                        x
+                    }
+                };
+                (tournament(), tournament())
+            }
+            _ => {
+                let a = self.rng.random_range(0..n);
+                let b = if n > 1 {
+                    let b = self.rng.random_range(0..n - 1);
+                    if b >= a { b + 1 } else { b }
+                } else {
+                    a
+                };
+                (a, b)
+            }
         };
         let plane = CutPlane::random(&mut self.rng);
         let cross = crossover(
@@ -200,20 +241,45 @@ impl Island {
     /// Which of an epoch's evaluated children would replace their dominant parent, in order: each
     /// only if strictly fitter than that slot's occupant at its turn (an earlier child of the
     /// epoch may have taken it).
+    ///
+    /// In a multi-objective run: by the Pareto crowding rule ([`Pareto::replaces`]), or under
+    /// NSGA-II whether the child survives the cut of the population and the epoch's children.
     pub fn winners<'a>(&'a self, children: &[Child], outcomes: &[&'a Outcome]) -> Vec<bool> {
-        let mut slots: Vec<&Outcome> = self.population.iter().map(|i| &i.outcome).collect();
+        let mut slots: Vec<&Outcome> = self.outcomes();
+        if let Some(pareto) = self.pareto.as_ref()
+            && pareto.selection == Selection::Nsga2
+        {
+            let n = slots.len();
+            slots.extend(outcomes);
+            let survivors = pareto.survivors(&slots, n);
+            return (n..n + children.len())
+                .map(|k| survivors.binary_search(&k).is_ok())
+                .collect();
+        }
         children
             .iter()
             .zip(outcomes)
             .map(|(child, &outcome)| {
-                let slot = &mut slots[child.dominant_parent];
-                let wins = outcome.is_fitter_than(slot);
+                let slot = child.dominant_parent;
+                let wins = match &self.pareto {
+                    Some(pareto) => pareto.replaces(&slots, slot, outcome),
+                    None => outcome.is_fitter_than(slots[slot]),
+                };
                 if wins {
-                    *slot = outcome;
+                    slots[slot] = outcome;
                 }
                 wins
             })
             .collect()
+    }
+
+    /// Whether `newcomer` (a migrant) would take slot `slot`: fitter than its occupant, or in a
+    /// multi-objective run by the Pareto crowding rule.
+    pub fn admits(&self, newcomer: &Outcome, slot: usize) -> bool {
+        match &self.pareto {
+            Some(pareto) => pareto.replaces(&self.outcomes(), slot, newcomer),
+            None => newcomer.is_fitter_than(&self.population[slot].outcome),
+        }
     }
 
     /// Applies an epoch's evaluated children in order ([`Island::winners`]). Returns how many
@@ -228,6 +294,13 @@ impl Island {
         assert_eq!(children.len(), outcomes.len(), "one outcome per child");
         let refs: Vec<&Outcome> = outcomes.iter().map(|(_, o)| o).collect();
         let wins = self.winners(&children, &refs);
+        if self
+            .pareto
+            .as_ref()
+            .is_some_and(|p| p.selection == Selection::Nsga2)
+        {
+            return self.cut(children, outcomes, &wins);
+        }
         self.combination =
             combine.and_then(|max_points| self.combine_improving(&children, &refs, max_points));
         let mut replaced = 0;
@@ -245,6 +318,36 @@ impl Island {
             }
         }
         replaced
+    }
+
+    /// NSGA-II's replacement: the population becomes the survivors of itself and its children,
+    /// in that order ([`Pareto::survivors`]); `wins` says which children survived.
+    fn cut(
+        &mut self,
+        children: Vec<Child>,
+        outcomes: Vec<(TaskId, Outcome)>,
+        wins: &[bool],
+    ) -> usize {
+        let n = self.population.len();
+        let mut merged: Vec<Individual> = std::mem::take(&mut self.population);
+        merged.extend(
+            children
+                .into_iter()
+                .zip(outcomes)
+                .map(|(child, (task, outcome))| Individual {
+                    genome: child.genome,
+                    outcome,
+                    task,
+                }),
+        );
+        let refs: Vec<&Outcome> = merged.iter().map(|i| &i.outcome).collect();
+        let survivors = self.pareto.as_ref().expect("NSGA-II").survivors(&refs, n);
+        let mut survivors = survivors.into_iter().peekable();
+        self.population = (merged.into_iter().enumerate())
+            .filter(|(k, _)| survivors.next_if_eq(k).is_some())
+            .map(|(_, individual)| individual)
+            .collect();
+        wins.iter().filter(|&&w| w).count()
     }
 
     /// The nudges of this epoch that beat the design they started from (the snapshot occupant of
@@ -291,8 +394,23 @@ impl Island {
         &self.population[self.best_index()]
     }
 
-    /// Slots from the fittest to the least fit (the lower slot first on a tie).
+    /// The hypervolume of a multi-objective island's population (`None` in a single-objective
+    /// run).
+    pub fn hypervolume(&self) -> Option<f64> {
+        Some(self.pareto.as_ref()?.hypervolume(&self.outcomes()))
+    }
+
+    /// The objectives' definitions and this population's values, if a multi-objective run.
+    pub fn pareto(&self) -> Option<&Pareto> {
+        self.pareto.as_ref()
+    }
+
+    /// Slots from the fittest to the least fit (the lower slot first on a tie); in a
+    /// multi-objective run from the best standing to the worst.
     pub fn ranked_slots(&self) -> Vec<usize> {
+        if let Some(pareto) = &self.pareto {
+            return pareto.ranked(&self.outcomes());
+        }
         let pop = &self.population;
         let mut order: Vec<usize> = (0..pop.len()).collect();
         order.sort_by(|&a, &b| {
@@ -303,8 +421,12 @@ impl Island {
         order
     }
 
-    /// Index of the least fit individual (the lowest index on a tie).
+    /// Index of the least fit individual (the lowest index on a tie); in a multi-objective run,
+    /// of the worst standing.
     pub fn worst_index(&self) -> usize {
+        if self.pareto.is_some() {
+            return *self.ranked_slots().last().expect("a population");
+        }
         let mut worst = 0;
         for (i, ind) in self.population.iter().enumerate() {
             if self.population[worst].outcome.is_fitter_than(&ind.outcome) {

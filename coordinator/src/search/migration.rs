@@ -189,10 +189,7 @@ pub fn migrate(
                     })
                     .unwrap_or(0),
             };
-            let admitted = !params.only_if_fitter
-                || migrant
-                    .outcome
-                    .is_fitter_than(&dest.population[target].outcome);
+            let admitted = !params.only_if_fitter || dest.admits(&migrant.outcome, target);
             let replaced = admitted.then(|| {
                 dest.population[target] = migrant;
                 target

@@ -9,6 +9,8 @@ mod fixtures;
 mod insertion;
 mod island;
 mod migration;
+mod objectives;
+mod pareto;
 mod resolution;
 mod stall;
 mod unchanged;
@@ -23,6 +25,8 @@ pub use migration::{
     ArrivalReplacement, EmigrantSelection, MigrationEvent, MigrationParams, Topology,
     genome_distance, migrate,
 };
+pub use objectives::{Front, Pareto, Selection, Standing, stands_better};
+pub use pareto::{crowding_distances, dominates, front_ranks, fronts, hypervolume};
 pub use resolution::{ResolutionSchedule, ResolutionState};
 pub use unchanged::{ParentDesigns, first_in_turn, keep_at_least_one};
 pub use variation::LocalSearchParams;

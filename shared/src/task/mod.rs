@@ -15,6 +15,7 @@ mod error;
 mod kindless;
 pub mod locomotion;
 pub mod memory;
+pub mod objectives;
 pub mod scene_toml;
 pub mod stiffness;
 
@@ -26,6 +27,7 @@ use serde::{Deserialize, Serialize};
 
 pub use design_space::DesignSpace;
 pub use error::{ImplausibleClaim, ResolutionError, SceneError};
+pub use objectives::{Objective, Sense};
 
 use crate::dynamics::DynamicScene;
 use crate::genome::{Genome, GenomeLimits};
@@ -137,6 +139,10 @@ pub trait Task {
     /// The stop rule: whether `metrics` meet a `budget.target_rms_percent` target (never called
     /// unless [`Task::HAS_TARGET`]; the config refuses the key otherwise).
     fn meets_target(&self, metrics: &Self::Metrics, target: f64) -> bool;
+    /// What a multi-objective search may trade off on this task.
+    const OBJECTIVES: &'static [Objective];
+    /// The values of [`Task::OBJECTIVES`], in their order, for a design evaluated at `dims`.
+    fn objective_values(&self, metrics: &Self::Metrics, dims: GridDims) -> Vec<f64>;
     /// The task's fields of `summary.json`.
     fn summary(&self, metrics: Option<&Self::Metrics>) -> serde_json::Value;
     /// The report's section on the best design: a heading and a table, with the paper's
@@ -303,6 +309,21 @@ macro_rules! tasks {
                     $((Scene::$variant(s), Metrics::$variant(m)) => s.check_metrics(*fitness, m, dims),)+
                     #[allow(unreachable_patterns)]
                     _ => Err(error::implausible!("metrics of another task for a {} scene", self.kind())),
+                }
+            }
+
+            /// The objectives a multi-objective search may trade off on this task.
+            pub fn objectives(&self) -> &'static [Objective] {
+                match self { $(Scene::$variant(_) => <$scene as Task>::OBJECTIVES),+ }
+            }
+
+            /// The objectives' values for an outcome evaluated at `dims`, in their order
+            /// (`None` for a failure).
+            pub fn objective_values(&self, outcome: &Outcome, dims: GridDims) -> Option<Vec<f64>> {
+                match (self, outcome.metrics()?) {
+                    $((Scene::$variant(s), Metrics::$variant(m)) => Some(s.objective_values(m, dims)),)+
+                    #[allow(unreachable_patterns)]
+                    _ => None,
                 }
             }
 

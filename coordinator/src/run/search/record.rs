@@ -110,5 +110,6 @@ fn history_row(
         best_figure: scene.figure(&best.outcome),
         mean_fitness: (!valid.is_empty()).then(|| valid.iter().sum::<f64>() / valid.len() as f64),
         replacements,
+        hypervolume: island.hypervolume(),
     }
 }

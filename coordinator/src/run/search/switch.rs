@@ -28,7 +28,7 @@ impl Search {
         let watched = if schedule.stall_on_finest && !self.resolution.is_final(schedule) {
             self.check_on_finest(config, evaluator, ctx)?
         } else {
-            self.best().outcome.rank()
+            self.progress()
         };
         let switch_affordable = config
             .budget
@@ -64,6 +64,7 @@ impl Search {
             ctx,
         )?;
         for (island, outcomes) in self.islands.iter_mut().zip(outcomes) {
+            island.at_resolution(dims);
             for (ind, (task, outcome)) in island.population.iter_mut().zip(outcomes) {
                 ind.outcome = outcome;
                 ind.task = task;

@@ -14,6 +14,7 @@ pub use scene::{BeamMetrics, BeamScene};
 pub use target::{NamedProfile, TargetProfile};
 
 use super::cantilever::check_cantilever_dims;
+use super::objectives::{self, Objective, Sense};
 use super::{
     Artefact, DesignSpace, Figure, ImplausibleClaim, LayerLoadCase, ResolutionError, SceneError,
     SimulatorSettings, Task, TaskOutcome,
@@ -104,6 +105,47 @@ impl Task for BeamScene {
 
     fn meets_target(&self, m: &BeamMetrics, target: f64) -> bool {
         m.rms_percent <= target
+    }
+
+    const OBJECTIVES: &'static [Objective] = &[
+        Objective {
+            name: "rms",
+            sense: Sense::Minimize,
+            unit: "%",
+            about: "the top surface's RMS deviation from the target, in % of the tip deflection",
+        },
+        Objective {
+            name: "hard_fraction",
+            sense: Sense::Minimize,
+            unit: "",
+            about: "the share of the workspace filled with the stiffest material",
+        },
+        Objective {
+            name: "voxels",
+            sense: Sense::Minimize,
+            unit: "",
+            about: "the design's voxels",
+        },
+        Objective {
+            name: "mass",
+            sense: Sense::Minimize,
+            unit: "kg",
+            about: "the design's mass, from its materials' densities",
+        },
+    ];
+
+    fn objective_values(&self, m: &BeamMetrics, dims: GridDims) -> Vec<f64> {
+        let counts = &m.material_counts;
+        vec![
+            m.rms_percent,
+            objectives::fraction_of_cells(
+                counts,
+                objectives::stiffest(&self.palette),
+                dims.cell_count(),
+            ),
+            m.voxels as f64,
+            objectives::mass(counts, &self.palette, self.voxel_size(dims)),
+        ]
     }
 
     fn summary(&self, metrics: Option<&BeamMetrics>) -> serde_json::Value {

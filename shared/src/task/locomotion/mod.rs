@@ -22,6 +22,7 @@ pub use scene::{LocomotionMetrics, LocomotionScene};
 pub use starts::Starts;
 pub use trajectory::{trajectory_csv, trajectory_plot};
 
+use super::objectives::{self, Objective, Sense};
 use super::{
     Artefact, DesignSpace, Figure, ImplausibleClaim, ResolutionError, SceneError,
     SimulatorSettings, Task, TaskOutcome,
@@ -125,6 +126,35 @@ impl Task for LocomotionScene {
 
     fn meets_target(&self, _m: &LocomotionMetrics, _target: f64) -> bool {
         false
+    }
+
+    const OBJECTIVES: &'static [Objective] = &[
+        Objective {
+            name: "speed",
+            sense: Sense::Maximize,
+            unit: "mm",
+            about: "the gait's travel over the actuation cycles (the fitness)",
+        },
+        Objective {
+            name: "voxels",
+            sense: Sense::Minimize,
+            unit: "",
+            about: "the body's voxels",
+        },
+        Objective {
+            name: "actuated_fraction",
+            sense: Sense::Minimize,
+            unit: "",
+            about: "the share of the body's voxels made of an actuated material",
+        },
+    ];
+
+    fn objective_values(&self, m: &LocomotionMetrics, _dims: GridDims) -> Vec<f64> {
+        vec![
+            self.figure(m),
+            m.voxels as f64,
+            objectives::actuated_fraction(&m.material_counts, &self.palette),
+        ]
     }
 
     fn summary(&self, metrics: Option<&LocomotionMetrics>) -> serde_json::Value {

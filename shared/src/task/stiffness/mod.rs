@@ -13,6 +13,7 @@ pub use evaluate::simulate_stiffness;
 pub use scene::{StiffnessMetrics, StiffnessScene};
 
 use super::cantilever::check_cantilever_dims;
+use super::objectives::{Objective, Sense};
 use super::{
     Artefact, DesignSpace, Figure, ImplausibleClaim, ResolutionError, SceneError,
     SimulatorSettings, Task, TaskOutcome,
@@ -90,6 +91,25 @@ impl Task for StiffnessScene {
 
     fn meets_target(&self, _m: &StiffnessMetrics, _target: f64) -> bool {
         false
+    }
+
+    const OBJECTIVES: &'static [Objective] = &[
+        Objective {
+            name: "compliance",
+            sense: Sense::Minimize,
+            unit: "J",
+            about: "the tip load times the tip's deflection (the inverse of stiffness)",
+        },
+        Objective {
+            name: "hard_fraction",
+            sense: Sense::Minimize,
+            unit: "",
+            about: "the share of the workspace filled with the hard material",
+        },
+    ];
+
+    fn objective_values(&self, m: &StiffnessMetrics, _dims: GridDims) -> Vec<f64> {
+        vec![self.tip_load * m.tip_deflection, m.hard_fraction]
     }
 
     fn summary(&self, metrics: Option<&StiffnessMetrics>) -> serde_json::Value {
