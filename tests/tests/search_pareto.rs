@@ -9,7 +9,7 @@ use amorph::task::Outcome;
 use amorph::voxel::GridDims;
 use amorph_coordinator::RunConfig;
 use amorph_coordinator::search::dominates;
-use amorph_tests::{fixture_config, scratch_dir, test_config, thread_count_blind};
+use amorph_tests::{binary, fixture_config, scratch_dir, test_config, thread_count_blind};
 
 const REFERENCE: [f64; 2] = [100.0, 1.0];
 
@@ -97,6 +97,56 @@ fn pareto_run(selection: &str) {
 #[test]
 fn a_pareto_crowding_run_writes_its_front_and_hypervolume() {
     pareto_run("crowding");
+}
+
+/// Any front member comes back from the run folder by its id: `worker evaluate --run DIR
+/// --design ID` evaluates the stored genome at its stored resolution to the row's values.
+#[test]
+fn a_front_member_is_exported_by_its_id() {
+    let dir = scratch_dir("pareto-export");
+    let config = config(&dir, "crowding");
+    let summary = amorph_tests::run_locally(&config, 2);
+    let (task, values) = front_rows(&config).pop().expect("a front");
+    let run = config.run_dir();
+    let out = std::process::Command::new(binary("worker"))
+        .args(["evaluate", "--run"])
+        .arg(&run)
+        .args(["--design", &task.to_string()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let outcome: Outcome = serde_json::from_slice(&out.stdout).unwrap();
+    let all = config
+        .scene
+        .objective_values(&outcome, summary.dims)
+        .unwrap();
+    assert_eq!(vec![all[0], all[1]], values);
+    let exported = dir.join("exported");
+    let out = std::process::Command::new(binary("worker"))
+        .args(["export", "--run"])
+        .arg(&run)
+        .args(["--design", &task.to_string(), "--out"])
+        .arg(&exported)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(exported.join("design.3mf").is_file());
+    let missing = std::process::Command::new(binary("worker"))
+        .args(["evaluate", "--run"])
+        .arg(&run)
+        .args(["--design", "999999"])
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no evaluation has task_id 999999"));
 }
 
 #[test]

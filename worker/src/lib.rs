@@ -5,9 +5,11 @@
 pub mod client;
 pub mod export;
 pub mod pool;
+mod run_design;
 
 pub use client::{ClientError, WorkerOptions, WorkerSummary, run_worker};
 pub use pool::EvaluationMode;
+pub use run_design::read_run_design;
 
 use std::path::Path;
 

@@ -81,14 +81,21 @@ struct Connect {
 #[derive(Debug, Args)]
 struct Design {
     /// A genome JSON, or a results file holding one such as best_genome.json.
-    #[arg(long)]
-    genome: PathBuf,
+    #[arg(long, required_unless_present = "run", conflicts_with = "run")]
+    genome: Option<PathBuf>,
     /// A run config (its [scene] is used) or a bare scene TOML.
-    #[arg(long)]
-    scene: PathBuf,
-    /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y).
-    #[arg(long)]
-    resolution: String,
+    #[arg(long, required_unless_present = "run", conflicts_with = "run")]
+    scene: Option<PathBuf>,
+    /// Resolution as NXxNYxNZ, e.g. 12x40x12 (a beam runs along y); with --run, the design's own
+    /// evaluation's unless given.
+    #[arg(long, required_unless_present = "run")]
+    resolution: Option<String>,
+    /// A run folder (results/<name>): the design is its evaluation --design, its scene the run's.
+    #[arg(long, requires = "design_id")]
+    run: Option<PathBuf>,
+    /// The evaluation's id in the run (task_id, as pareto.csv and run.sqlite give it).
+    #[arg(long = "design", id = "design_id", requires = "run")]
+    design_id: Option<u64>,
     /// Threads that share the simulation (default 1); the outcome is the same bits for any count.
     #[arg(long, default_value_t = 1)]
     threads: usize,
@@ -103,10 +110,16 @@ impl Design {
     }
 
     fn load(&self) -> anyhow::Result<(Genome, Scene, GridDims)> {
+        let resolution = (self.resolution.as_deref()).map(amorph_worker::parse_resolution);
+        if let (Some(run), Some(id)) = (&self.run, self.design_id) {
+            let (genome, scene, stored) = amorph_worker::read_run_design(run, id)?;
+            return Ok((genome, scene, resolution.transpose()?.unwrap_or(stored)));
+        }
+        let given = "clap requires --genome, --scene and --resolution without --run";
         Ok((
-            amorph_worker::read_genome(&self.genome)?,
-            amorph_worker::read_scene(&self.scene)?,
-            amorph_worker::parse_resolution(&self.resolution)?,
+            amorph_worker::read_genome(self.genome.as_ref().expect(given))?,
+            amorph_worker::read_scene(self.scene.as_ref().expect(given))?,
+            resolution.expect(given)?,
         ))
     }
 }
