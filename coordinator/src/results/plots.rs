@@ -6,6 +6,7 @@ use std::path::Path;
 use amorph::report::{PlotSpec, Series, line_plot};
 use amorph::task::Figure;
 
+use crate::search::Front;
 use crate::summary::{HistoryRow, RunSummary};
 
 /// Colours of the islands' lines, cycled past six.
@@ -64,4 +65,48 @@ pub(super) fn write_progress(
         dir.join("progress_wall_time.png"),
         plot(&|r| r.wall_seconds, "WALL TIME (S)")?,
     )
+}
+
+/// pareto.png: the front on its first two objectives, a step per design, with the run's fittest
+/// design by the task's single fitness marked beside it.
+pub(super) fn write_front(dir: &Path, name: &str, front: &Front) -> std::io::Result<()> {
+    let label = |k: usize| {
+        let o = &front.objectives[k];
+        let unit = if o.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", o.unit)
+        };
+        format!("{}{unit}", o.name.replace('_', " ")).to_uppercase()
+    };
+    let mut points: Vec<[f64; 2]> = front.members.iter().map(|(_, v)| [v[0], v[1]]).collect();
+    points.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    let mut series = vec![Series {
+        label: format!("front ({} designs)", points.len()),
+        colour: ISLAND_COLOURS[0],
+        markers: true,
+        points,
+    }];
+    if let Some(fittest) = &front.fittest {
+        series.push(Series {
+            label: "fittest by the single fitness".into(),
+            colour: ISLAND_COLOURS[1],
+            markers: true,
+            points: vec![[fittest[0], fittest[1]]],
+        });
+    }
+    let more = if front.objectives.len() > 2 {
+        " (first two objectives)"
+    } else {
+        ""
+    };
+    let spec = PlotSpec {
+        title: format!("{name}: Pareto front{more}"),
+        x_label: label(0),
+        y_label: label(1),
+        log_x: false,
+        log_y: false,
+    };
+    let png = (line_plot(&spec, &series).to_png()).map_err(std::io::Error::other)?;
+    std::fs::write(dir.join("pareto.png"), png)
 }

@@ -8,6 +8,8 @@ use amorph::report::{Block, Link, Picture, Report};
 use amorph::task::{Artefact, Scene};
 
 use super::finishing::FinerCheck;
+use crate::ids::TaskId;
+use crate::search::Front;
 use crate::summary::{RunSummary, StopReason};
 
 /// What the report shows besides the summary: files written by the results writer.
@@ -73,6 +75,9 @@ pub(super) fn run_report(summary: &RunSummary, inputs: &ReportInputs<'_>) -> Rep
             .map(|(i, p)| picture(p, &format!("island {i}")))
             .collect(),
     ));
+    if let Some(front) = &summary.pareto {
+        front_section(&mut report, front);
+    }
     report.push(Block::Heading("Progress".into()));
     report.push(Block::Pictures(vec![
         picture(
@@ -136,6 +141,50 @@ pub(super) fn run_report(summary: &RunSummary, inputs: &ReportInputs<'_>) -> Rep
 }
 
 /// summary.md: the task's table and one line on the run.
+/// The trade-offs a multi-objective run found: the front's size and hypervolume, its picture, and
+/// its designs along the first objective (twelve spread evenly over it, past twelve).
+fn front_section(report: &mut Report, front: &Front) {
+    report.push(Block::Heading("Trade-offs".into()));
+    let names: Vec<&str> = front.objectives.iter().map(|o| o.name).collect();
+    report.push(Block::Paragraph(format!(
+        "{} designs on the Pareto front of {} at the final resolution (the designs the run evaluated there that no other beats in every objective), dominating a hypervolume of {:e}. `pareto.csv` lists them all; `worker export --run <this folder> --design ID` exports any of them.",
+        front.members.len(),
+        names.join(" against "),
+        front.hypervolume
+    )));
+    report.push(Block::Pictures(vec![Picture {
+        path: "pareto.png".into(),
+        caption:
+            "the front on its first two objectives, and the fittest design by the task's fitness"
+                .into(),
+    }]));
+    let mut rows: Vec<&(TaskId, Vec<f64>)> = front.members.iter().collect();
+    rows.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]).then(a.0.cmp(&b.0)));
+    let shown: Vec<&(TaskId, Vec<f64>)> = if rows.len() <= 12 {
+        rows
+    } else {
+        (0..12).map(|k| rows[k * (rows.len() - 1) / 11]).collect()
+    };
+    let mut header = vec!["design (task_id)".to_string()];
+    header.extend(front.objectives.iter().map(|o| {
+        if o.unit.is_empty() {
+            o.name.to_string()
+        } else {
+            format!("{} ({})", o.name, o.unit)
+        }
+    }));
+    report.push(Block::Table {
+        header,
+        rows: (shown.iter())
+            .map(|(task, values)| {
+                let mut row = vec![task.0.to_string()];
+                row.extend(values.iter().map(|v| format!("{v:.4}")));
+                row
+            })
+            .collect(),
+    });
+}
+
 pub(super) fn summary_markdown(summary: &RunSummary, name: &str, scene: &Scene) -> String {
     let (heading, table) = scene.table(&summary.best().outcome, summary.dims);
     let mut doc = Report::new(format!("Run `{name}`"));

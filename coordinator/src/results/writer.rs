@@ -142,6 +142,7 @@ impl ResultWriter {
         write_json(&self.dir.join("population.json"), &populations)?;
         if let Some(front) = &summary.pareto {
             write_front(&self.dir.join("pareto.csv"), front)?;
+            super::plots::write_front(&self.dir, &self.config.name, front)?;
         }
 
         let grid = scene.design(&best.genome, summary.dims);

@@ -16,6 +16,7 @@ use crate::evaluator::{Evaluator, EvaluatorError};
 use crate::progress::Progress;
 use crate::results::ResultWriter;
 use crate::search::DiversityLog;
+use crate::search::Front;
 use crate::store::{RunStore, StoreError};
 use crate::summary::{RunSummary, StopReason};
 use crate::verification::VerificationError;
@@ -126,13 +127,13 @@ pub fn run(
         Some(pareto) => {
             let stored = ctx.store.evaluations()?;
             let level = dims.to_string();
-            Some(
-                pareto.front(
-                    (stored.iter())
-                        .filter(|(_, e)| e.resolution == level && !e.unchecked)
-                        .map(|(task, e)| (*task, &e.outcome)),
-                ),
-            )
+            let front = pareto.front(
+                (stored.iter())
+                    .filter(|(_, e)| e.resolution == level && !e.unchecked)
+                    .map(|(task, e)| (*task, &e.outcome)),
+            );
+            let fittest = pareto.values(&search.best().outcome);
+            Some(Front { fittest, ..front })
         }
         None => None,
     };

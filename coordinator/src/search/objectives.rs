@@ -162,6 +162,9 @@ pub struct Front {
     pub members: Vec<(TaskId, Vec<f64>)>,
     /// The hypervolume the members dominate up to the config's reference point.
     pub hypervolume: f64,
+    /// The objectives' values of the run's fittest design by the task's single fitness, for
+    /// comparison (`None` if it failed).
+    pub fittest: Option<Vec<f64>>,
 }
 
 impl Pareto {
@@ -191,6 +194,7 @@ impl Pareto {
                 .map(|(task, _, outcome)| (*task, self.values(outcome).expect("evaluated")))
                 .collect(),
             hypervolume: self.hypervolume(&on_front),
+            fittest: None,
         }
     }
 }
