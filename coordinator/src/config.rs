@@ -98,7 +98,7 @@ pub struct SearchSection {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub objectives: Vec<String>,
     /// How an island of a multi-objective run keeps its population.
-    #[serde(skip_serializing_if = "Selection::is_crowding")]
+    #[serde(skip_serializing_if = "Selection::is_default")]
     pub selection: Selection,
     /// The point the hypervolume is measured from, one value per objective in the task's units:
     /// a design counts only where it is better than it in every objective.
@@ -119,7 +119,7 @@ impl Default for SearchSection {
             migration: MigrationParams::default(),
             local_search: LocalSearchParams::default(),
             objectives: Vec::new(),
-            selection: Selection::Crowding,
+            selection: Selection::default(),
             hypervolume_reference: Vec::new(),
         }
     }
@@ -405,8 +405,8 @@ fn validate(raw: &RawConfig) -> std::result::Result<(), String> {
 fn validate_objectives(raw: &RawConfig) -> std::result::Result<(), String> {
     let s = &raw.search;
     if s.objectives.is_empty() {
-        if s.selection != Selection::Crowding {
-            return Err("search.selection = \"nsga2\" needs search.objectives".into());
+        if !s.selection.is_default() {
+            return Err("search.selection needs search.objectives".into());
         }
         if !s.hypervolume_reference.is_empty() {
             return Err("search.hypervolume_reference needs search.objectives".into());

@@ -171,7 +171,10 @@ fn objective_keys_are_checked_by_name() {
             &["search.objectives=[\"rms\", \"voxels\"]"],
             "search.hypervolume_reference must hold one finite number per objective (2)",
         ),
-        (&["search.selection=\"nsga2\""], "needs search.objectives"),
+        (
+            &["search.selection=\"crowding\""],
+            "search.selection needs search.objectives",
+        ),
         (
             &[
                 "search.objectives=[\"rms\", \"voxels\"]",
