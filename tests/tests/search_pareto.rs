@@ -108,17 +108,25 @@ fn a_front_member_is_exported_by_its_id() {
     let summary = amorph_tests::run_locally(&config, 2);
     let (task, values) = front_rows(&config).pop().expect("a front");
     let run = config.run_dir();
-    let out = std::process::Command::new(binary("worker"))
-        .args(["evaluate", "--run"])
-        .arg(&run)
-        .args(["--design", &task.to_string()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // `worker <command> --run <run> --design <id> <more>`, with its output.
+    let worker = |command: &str, id: &str, more: &[&Path]| {
+        std::process::Command::new(binary("worker"))
+            .args([command, "--run"])
+            .arg(&run)
+            .args(["--design", id])
+            .args(more.iter().flat_map(|p| [Path::new("--out"), p]))
+            .output()
+            .unwrap()
+    };
+    let succeeded = |out: &std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let out = worker("evaluate", &task.to_string(), &[]);
+    succeeded(&out);
     let outcome: Outcome = serde_json::from_slice(&out.stdout).unwrap();
     let all = config
         .scene
@@ -126,25 +134,9 @@ fn a_front_member_is_exported_by_its_id() {
         .unwrap();
     assert_eq!(vec![all[0], all[1]], values);
     let exported = dir.join("exported");
-    let out = std::process::Command::new(binary("worker"))
-        .args(["export", "--run"])
-        .arg(&run)
-        .args(["--design", &task.to_string(), "--out"])
-        .arg(&exported)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&worker("export", &task.to_string(), &[&exported]));
     assert!(exported.join("design.3mf").is_file());
-    let missing = std::process::Command::new(binary("worker"))
-        .args(["evaluate", "--run"])
-        .arg(&run)
-        .args(["--design", "999999"])
-        .output()
-        .unwrap();
+    let missing = worker("evaluate", "999999", &[]);
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no evaluation has task_id 999999"));
 }
