@@ -79,8 +79,9 @@ pub(super) fn write_front(dir: &Path, name: &str, front: &Front) -> std::io::Res
         };
         format!("{}{unit}", o.name.replace('_', " ")).to_uppercase()
     };
-    let mut points: Vec<[f64; 2]> = front.members.iter().map(|(_, v)| [v[0], v[1]]).collect();
-    points.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    let points: Vec<[f64; 2]> = (front.along_first().iter())
+        .map(|(_, v)| [v[0], v[1]])
+        .collect();
     let mut series = vec![Series {
         label: format!("front ({} designs)", points.len()),
         colour: ISLAND_COLOURS[0],

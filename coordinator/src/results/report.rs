@@ -158,8 +158,7 @@ fn front_section(report: &mut Report, front: &Front) {
             "the front on its first two objectives, and the fittest design by the task's fitness"
                 .into(),
     }]));
-    let mut rows: Vec<&(TaskId, Vec<f64>)> = front.members.iter().collect();
-    rows.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]).then(a.0.cmp(&b.0)));
+    let rows = front.along_first();
     let shown: Vec<&(TaskId, Vec<f64>)> = if rows.len() <= 12 {
         rows
     } else {

@@ -298,9 +298,7 @@ fn write_front(path: &std::path::Path, front: &Front) -> std::io::Result<()> {
     let mut out = BufWriter::new(File::create(path)?);
     let names: Vec<&str> = front.objectives.iter().map(|o| o.name).collect();
     writeln!(out, "task_id,{}", names.join(","))?;
-    let mut rows: Vec<&(crate::ids::TaskId, Vec<f64>)> = front.members.iter().collect();
-    rows.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]).then(a.0.cmp(&b.0)));
-    for (task, values) in rows {
+    for (task, values) in front.along_first() {
         let values: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
         writeln!(out, "{},{}", task.0, values.join(","))?;
     }

@@ -39,6 +39,8 @@ pub struct Pareto {
     scene: Arc<Scene>,
     /// Indices into the task's objectives, in the config's order.
     chosen: Vec<usize>,
+    /// Those objectives, in the same order.
+    objectives: Vec<Objective>,
     pub selection: Selection,
     /// The hypervolume's reference point, minimized like the points.
     reference: Vec<f64>,
@@ -73,9 +75,11 @@ impl Pareto {
         let reference = (chosen.iter().zip(reference))
             .map(|(&k, &r)| objectives[k].minimized(r))
             .collect();
+        let objectives = chosen.iter().map(|&k| objectives[k]).collect();
         Self {
             scene,
             chosen,
+            objectives,
             selection,
             reference,
             dims,
@@ -83,9 +87,8 @@ impl Pareto {
     }
 
     /// The run's objectives, in the config's order.
-    pub fn objectives(&self) -> Vec<Objective> {
-        let all = self.scene.objectives();
-        self.chosen.iter().map(|&k| all[k]).collect()
+    pub fn objectives(&self) -> &[Objective] {
+        &self.objectives
     }
 
     /// An outcome's values as the task states them (`None` for a failure).
@@ -98,11 +101,15 @@ impl Pareto {
     /// better. A failure is infinite in every objective, so every evaluated design dominates it.
     pub fn point(&self, outcome: &Outcome) -> Vec<f64> {
         match self.values(outcome) {
-            Some(values) => (self.objectives().iter().zip(values))
-                .map(|(o, v)| o.minimized(v))
-                .collect(),
+            Some(values) => self.minimized(&values),
             None => vec![f64::INFINITY; self.chosen.len()],
         }
+    }
+
+    fn minimized(&self, values: &[f64]) -> Vec<f64> {
+        (self.objectives.iter().zip(values))
+            .map(|(o, &v)| o.minimized(v))
+            .collect()
     }
 
     /// Each outcome's standing among `outcomes`.
@@ -169,6 +176,16 @@ pub struct Front {
     pub fittest: Option<Vec<f64>>,
 }
 
+impl Front {
+    /// The members along the first objective (then by evaluation), as pareto.csv, pareto.png
+    /// and the report show them.
+    pub fn along_first(&self) -> Vec<&(TaskId, Vec<f64>)> {
+        let mut rows: Vec<&(TaskId, Vec<f64>)> = self.members.iter().collect();
+        rows.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]).then(a.0.cmp(&b.0)));
+        rows
+    }
+}
+
 impl Pareto {
     /// The non-dominated designs among `evaluations` (all evaluated at this resolution): a
     /// design whose values equal an earlier evaluation's counts once, as the earlier.
@@ -177,25 +194,26 @@ impl Pareto {
         evaluated.sort_by_key(|(task, _)| *task);
         // In task order, an archive of the non-dominated so far: a newcomer equal to or dominated
         // by a member is dropped, and drops the members it dominates.
-        let mut archive: Vec<(TaskId, Vec<f64>, &Outcome)> = Vec::new();
+        let mut archive: Vec<(TaskId, Vec<f64>, Vec<f64>)> = Vec::new();
         for (task, outcome) in evaluated {
-            if self.values(outcome).is_none() {
+            let Some(values) = self.values(outcome) else {
+                continue;
+            };
+            let point = self.minimized(&values);
+            if (archive.iter()).any(|(_, _, p)| *p == point || dominates(p, &point)) {
                 continue;
             }
-            let point = self.point(outcome);
-            if (archive.iter()).any(|(_, p, _)| *p == point || dominates(p, &point)) {
-                continue;
-            }
-            archive.retain(|(_, p, _)| !dominates(&point, p));
-            archive.push((task, point, outcome));
+            archive.retain(|(_, _, p)| !dominates(&point, p));
+            archive.push((task, values, point));
         }
-        let on_front: Vec<&Outcome> = archive.iter().map(|(_, _, o)| *o).collect();
+        let points: Vec<&[f64]> = archive.iter().map(|(_, _, p)| p.as_slice()).collect();
         Front {
-            objectives: self.objectives(),
-            members: (archive.iter())
-                .map(|(task, _, outcome)| (*task, self.values(outcome).expect("evaluated")))
+            objectives: self.objectives.clone(),
+            hypervolume: hypervolume(&points, &self.reference),
+            members: archive
+                .into_iter()
+                .map(|(task, values, _)| (task, values))
                 .collect(),
-            hypervolume: self.hypervolume(&on_front),
             fittest: None,
         }
     }
