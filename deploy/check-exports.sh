@@ -9,14 +9,10 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
-if ! command -v admesh >/dev/null; then
-  apt-get update -qq >/dev/null && apt-get install -y -qq admesh >/dev/null
-fi
+source deploy/checker-tools.sh
+debian_package admesh admesh
 venv="$root/target/exports-venv"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import lib3mf" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet --disable-pip-version-check lib3mf
-fi
+python_tools "$venv" lib3mf lib3mf
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 cargo run --quiet --locked --bin worker -- export --genome tests/fixtures/circular_arc_beam.json \

@@ -112,6 +112,7 @@ impl AskedRun {
             best_fitness: self.best,
             populations: Vec::new(),
             migrations: &[],
+            history: &[],
         })?;
         Ok(outcomes)
     }

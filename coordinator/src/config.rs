@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::cluster::settings::ClusterSection;
 use crate::cluster::settings::ClusterSettings;
+pub use crate::dashboard::DashboardSection;
 use crate::search::{LocalSearchParams, MigrationParams, ResolutionSchedule, Selection};
 pub use export::ExportSection;
 
@@ -63,6 +64,9 @@ pub struct RawConfig {
     /// End-of-run exports beyond the fabrication files (slice stack, finer-resolution check).
     #[serde(default)]
     pub export: ExportSection,
+    /// The live dashboard, served while the run goes.
+    #[serde(default, skip_serializing_if = "DashboardSection::is_default")]
+    pub dashboard: DashboardSection,
     pub resolution: ResolutionSchedule,
     pub scene: Scene,
 }
@@ -149,6 +153,7 @@ pub struct RunConfig {
     pub search: SearchSection,
     pub budget: BudgetSection,
     pub export: ExportSection,
+    pub dashboard: DashboardSection,
     pub resolution: ResolutionSchedule,
     pub scene: Scene,
     /// Where this config came from, for messages.
@@ -258,6 +263,7 @@ impl RunConfig {
             search,
             budget,
             export,
+            dashboard,
             resolution,
             scene,
         } = raw;
@@ -269,6 +275,7 @@ impl RunConfig {
             search,
             budget,
             export,
+            dashboard,
             resolution,
             scene,
             source: path.to_owned(),
@@ -285,6 +292,7 @@ impl RunConfig {
             search: self.search.clone(),
             budget: self.budget.clone(),
             export: self.export.clone(),
+            dashboard: self.dashboard.clone(),
             resolution: self.resolution.clone(),
             scene: self.scene.clone(),
         }

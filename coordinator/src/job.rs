@@ -19,6 +19,7 @@ use crate::cluster::queue::QueueError;
 use crate::cluster::server::ServerHandle;
 use crate::cluster::{self, ClusterEvaluator, ClusterSettings, ServerOptions, TaskQueue, Verify};
 use crate::config::RunConfig;
+use crate::dashboard::{self, Dashboard};
 use crate::progress::Progress;
 use crate::run::{RunContext, RunError, run};
 use crate::store::{RunStore, StoreError};
@@ -51,6 +52,10 @@ pub struct JobOptions {
     pub shutdown: Arc<AtomicBool>,
     /// Told the server's address once it listens (before the first task is queued).
     pub on_listening: Option<std::sync::mpsc::Sender<SocketAddr>>,
+    /// Overrides `dashboard.listen`: where to serve the live dashboard.
+    pub dashboard: Option<String>,
+    /// Told the dashboard's address once it is served.
+    pub on_dashboard: Option<std::sync::mpsc::Sender<SocketAddr>>,
 }
 
 impl Default for JobOptions {
@@ -63,6 +68,8 @@ impl Default for JobOptions {
             progress: Progress::hidden(),
             shutdown: Arc::new(AtomicBool::new(false)),
             on_listening: None,
+            dashboard: None,
+            on_dashboard: None,
         }
     }
 }
@@ -79,6 +86,8 @@ pub enum JobError {
     Config { path: String, message: String },
     #[error("cannot start the async runtime: {0}")]
     Runtime(std::io::Error),
+    #[error(transparent)]
+    Dashboard(#[from] crate::dashboard::DashboardError),
 }
 
 /// Runs a config on the cluster: the coordinator's gRPC server, `local_workers` in-process workers
@@ -116,6 +125,7 @@ pub struct Coordinator {
     workers: Vec<JoinHandle<Result<LocalSummary, QueueError>>>,
     stop_workers: watch::Sender<bool>,
     shutdown: Arc<AtomicBool>,
+    dashboard: Option<Dashboard>,
 }
 
 impl Coordinator {
@@ -165,6 +175,20 @@ impl Coordinator {
             queue.clone(),
             &config.scene,
         ))?;
+        let dashboard = match options
+            .dashboard
+            .as_ref()
+            .or(config.dashboard.listen.as_ref())
+        {
+            None => None,
+            Some(listen) => match runtime.block_on(dashboard::bind(listen, token.clone())) {
+                Ok(bound) => Some(bound),
+                Err(e) => {
+                    runtime.block_on(server.shutdown());
+                    return Err(e.into());
+                }
+            },
+        };
         let store = match options.store {
             StoreMode::New => RunStore::create(config, false),
             StoreMode::Fresh => RunStore::create(config, true),
@@ -181,6 +205,22 @@ impl Coordinator {
         if let Some(tx) = &options.on_listening {
             let _ = tx.send(server.addr);
         }
+        let dashboard = match dashboard {
+            None => None,
+            Some(bound) => match runtime.block_on(bound.serve(store.path(), Some(queue.clone()))) {
+                Ok(dashboard) => {
+                    if let Some(tx) = &options.on_dashboard {
+                        let _ = tx.send(dashboard.addr);
+                    }
+                    info!(url = %dashboard.url(), "dashboard served");
+                    Some(dashboard)
+                }
+                Err(e) => {
+                    runtime.block_on(server.shutdown());
+                    return Err(e.into());
+                }
+            },
+        };
 
         let (stop_workers, stop_rx) = watch::channel(false);
         let local = settings.local_workers;
@@ -217,6 +257,7 @@ impl Coordinator {
             workers,
             stop_workers,
             shutdown: options.shutdown.clone(),
+            dashboard,
         })
     }
 
@@ -237,8 +278,11 @@ impl Coordinator {
         }
         let _ = self.stop_workers.send(true);
         let (queue, shutdown, server) = (self.queue, self.shutdown, self.server);
-        let workers = self.workers;
+        let (workers, dashboard) = (self.workers, self.dashboard);
         self.runtime.block_on(async {
+            if let Some(dashboard) = dashboard {
+                dashboard.shutdown().await;
+            }
             for worker in workers {
                 match tokio::time::timeout(Duration::from_secs(3), worker).await {
                     Ok(Ok(Ok(_))) => {}

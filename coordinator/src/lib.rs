@@ -5,6 +5,7 @@
 pub mod asked;
 pub mod cluster;
 pub mod config;
+pub mod dashboard;
 pub mod evaluator;
 pub use amorph_proto::ids;
 pub mod job;

@@ -3,6 +3,7 @@
 //! `coordinator` and `worker` binaries run: in one process (the reference), as an in-process
 //! cluster on 127.0.0.1:0 with workers the test starts and kills, or as real processes.
 
+pub mod http;
 pub mod peer;
 
 use std::net::SocketAddr;

@@ -301,6 +301,21 @@ fn a_plausible_forged_outcome_is_checked_and_its_worker_quarantined() {
         "{checks} checks, {disagreed} disagreed"
     );
     assert_eq!(quarantined, 1);
+    // The dashboard shows the same counts, and the liar among the workers, quarantined.
+    let status = amorph_tests::http::store_status(&store);
+    let v = &status["verification"];
+    assert_eq!(
+        (
+            v["checks"].as_u64(),
+            v["disagreements"].as_u64(),
+            v["quarantined_workers"].as_u64()
+        ),
+        (Some(checks), Some(disagreed), Some(quarantined))
+    );
+    let caught: Vec<&serde_json::Value> = (status["workers"].as_array().unwrap().iter())
+        .filter(|w| w["quarantined"] == true)
+        .collect();
+    assert_eq!(caught.len(), 1, "{:#}", status["workers"]);
 }
 
 /// Beyond the population: with `verify = true` a worker may still claim a *worse* outcome than the

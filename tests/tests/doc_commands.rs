@@ -157,7 +157,10 @@ fn every_documented_coordinator_command_checks() {
     let scratch = scratch_dir("doc-credentials");
     let mut checked = 0;
     let mut failed = Vec::new();
-    for run in documented_runs().iter().filter(|r| r.bin == "coordinator") {
+    let commands = documented_runs();
+    let coordinator = commands.iter().filter(|r| r.bin == "coordinator");
+    // `dashboard` serves a store until stopped: its own test below runs it.
+    for run in coordinator.filter(|r| r.args.first().is_none_or(|a| a != "dashboard")) {
         // `credentials` commands write files, so they run for real in a folder of their own;
         // every other command only checks its config.
         let out = if run.args.first().is_some_and(|a| a == "credentials") {
@@ -233,6 +236,78 @@ fn every_documented_worker_export_and_evaluate_runs() {
         runs.len()
     );
     assert!(failed.is_empty(), "{failed:#?}");
+}
+
+/// `coordinator dashboard results/NAME/run.sqlite` as the docs write it (on a free port), on a
+/// finished run: it serves the run's status.
+#[test]
+fn every_documented_dashboard_command_serves_its_store() {
+    let scratch = scratch_dir("doc-dashboard");
+    let runs: Vec<CargoRun> = documented_runs()
+        .into_iter()
+        .filter(|r| r.bin == "coordinator" && r.args.first().is_some_and(|a| a == "dashboard"))
+        .collect();
+    assert!(
+        !runs.is_empty(),
+        "no coordinator dashboard command found in the docs"
+    );
+    for run in &runs {
+        let store = run.args.get(1).expect("dashboard STORE");
+        let name = (store.strip_prefix("results/"))
+            .and_then(|rest| rest.strip_suffix("/run.sqlite"))
+            .unwrap_or_else(|| panic!("`{}`: not a results/NAME/run.sqlite", run.command));
+        let config = test_config(
+            "small_beam",
+            &scratch.join("results"),
+            &[&format!("name={name}"), "budget.evaluations=40"],
+        );
+        if !amorph_coordinator::store::RunStore::path_for(&config).exists() {
+            run_locally(&config, 2);
+        }
+        let mut args = run.args.clone();
+        match args.iter().position(|a| a == "--listen") {
+            Some(i) => args[i + 1] = "127.0.0.1:0".into(),
+            None => args.extend(["--listen".into(), "127.0.0.1:0".into()]),
+        }
+        let mut child = KilledOnDrop(
+            Command::new(binary("coordinator"))
+                .args(&args)
+                .current_dir(&scratch)
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap(),
+        );
+        let stderr = std::io::BufReader::new(child.0.stderr.take().unwrap());
+        let url = std::io::BufRead::lines(stderr)
+            .map_while(Result::ok)
+            .find_map(|line| {
+                Some(
+                    line.split(" on http://")
+                        .nth(1)?
+                        .split('/')
+                        .next()?
+                        .to_owned(),
+                )
+            });
+        let served = url
+            .and_then(|addr| addr.parse().ok())
+            .map(|addr| amorph_tests::http::get(addr, "/api/status", &[]));
+        drop(child);
+        let (code, _, body) = served.unwrap_or_else(|| panic!("`{}` never served", run.command));
+        assert_eq!(code, 200, "`{}`", run.command);
+        let status: serde_json::Value = serde_json::from_slice(&body).unwrap();
+        assert_eq!(status["run"]["name"], name, "`{}`", run.command);
+    }
+}
+
+/// A child process that is killed when dropped, so a failing assertion leaves none behind.
+struct KilledOnDrop(std::process::Child);
+
+impl Drop for KilledOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
 }
 
 #[test]

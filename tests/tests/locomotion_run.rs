@@ -96,6 +96,24 @@ fn a_locomotion_run_evaluates_walkers_deterministically_and_summarises_them() {
     let trajectory = std::fs::read_to_string(config.run_dir().join("trajectory.csv")).unwrap();
     // Header, settling checks, the settled sample, 20 samples per cycle for 2 cycles.
     assert!(trajectory.lines().count() >= 1 + 1 + 1 + 40);
+
+    // The dashboard draws the best robot's track from its stored outcome, and shows its speed
+    // beside the paper's.
+    let status =
+        amorph_tests::http::store_status(&amorph_coordinator::store::RunStore::path_for(&config));
+    let best = &status["best"];
+    assert_eq!(best["fitness"].as_f64(), two.best().outcome.fitness());
+    let track = &best["outcome"]["evaluated"]["metrics"]["locomotion"]["centre_of_mass_trace"];
+    assert_eq!(track.as_array().map(Vec::len), Some(3), "{best:#}");
+    assert_eq!(
+        best["summary"]["speed_percent_body_length_per_cycle"].as_f64(),
+        Some(speed)
+    );
+    assert_eq!(
+        best["summary"]["paper_speed_percent_body_length_per_cycle"],
+        3.38
+    );
+    assert_eq!(status["run"]["figure"], "gait_mm");
 }
 
 /// A locomotion run config with nothing but what a parse needs; tests add their scene keys.

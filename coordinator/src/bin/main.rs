@@ -2,7 +2,7 @@
 //! default, workers inside this process; `worker --connect URL` processes may join at any time).
 //! Without `--config` it runs the quickstart compiled into it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -49,6 +49,10 @@ struct Cli {
     /// Workers inside this process, overriding `cluster.local_workers` (0: external workers only).
     #[arg(long)]
     local_workers: Option<usize>,
+    /// Serve the live dashboard on this address while the run goes (e.g. 127.0.0.1:8080),
+    /// overriding `dashboard.listen`; open it in a browser (docs/how-to/dashboard.md).
+    #[arg(long, value_name = "ADDR")]
+    dashboard: Option<String>,
     /// Only read and check the config (with its `--set`s and preset), print the effective
     /// config.toml the run would record, and exit: nothing runs, nothing is written.
     #[arg(long, conflicts_with = "health_check")]
@@ -64,6 +68,19 @@ enum Command {
     /// credentials check each other's outcomes (docs/how-to/cluster.md).
     #[command(subcommand)]
     Credentials(CredentialsCommand),
+    /// Serves the dashboard of a run from its store (results/<run>/run.sqlite), finished or still
+    /// being written by another process, until Ctrl-C.
+    Dashboard {
+        /// The run's store.
+        store: PathBuf,
+        /// Address to serve the page on (port 0 picks a free one).
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        listen: String,
+        /// File holding the token a browser must present when listening beyond loopback
+        /// (AMORPH_TOKEN, if set, takes precedence).
+        #[arg(long)]
+        token_file: Option<PathBuf>,
+    },
 }
 
 #[derive(Debug, clap::Subcommand)]
@@ -137,9 +154,6 @@ fn main() -> std::process::ExitCode {
 }
 
 fn try_main(cli: Cli) -> anyhow::Result<()> {
-    if let Some(Command::Credentials(command)) = cli.command {
-        return credentials(command);
-    }
     if let Some(url) = &cli.health_check {
         return health_check(url);
     }
@@ -150,6 +164,15 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
+    match cli.command {
+        Some(Command::Credentials(command)) => return credentials(command),
+        Some(Command::Dashboard {
+            store,
+            listen,
+            token_file,
+        }) => return dashboard(&store, &listen, token_file.as_deref()),
+        None => {}
+    }
     let config = match &cli.config {
         Some(path) => RunConfig::load_with(path, &cli.overrides)?,
         None => RunConfig::quickstart(&cli.overrides)?,
@@ -161,6 +184,7 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
     let shutdown = Arc::new(AtomicBool::new(false));
     stop_on_signal(shutdown.clone());
     let (tx, rx) = std::sync::mpsc::channel();
+    let (dashboard_tx, dashboard_rx) = std::sync::mpsc::channel();
     let options = JobOptions {
         store: if cli.resume || (cli.resume_if_present && RunStore::path_for(&config).exists()) {
             StoreMode::Resume
@@ -175,11 +199,16 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         progress: Progress::stderr(config.budget.evaluations),
         shutdown: shutdown.clone(),
         on_listening: Some(tx),
+        dashboard: cli.dashboard,
+        on_dashboard: Some(dashboard_tx),
     };
-    // Say where workers can connect, as soon as the server listens.
+    // Say where workers can connect, as soon as the server listens, and where the dashboard is.
     std::thread::spawn(move || {
         if let Ok(addr) = rx.recv() {
             eprintln!("coordinator: serving workers on {addr} (worker --connect http://{addr})");
+        }
+        if let Ok(addr) = dashboard_rx.recv() {
+            eprintln!("coordinator: dashboard on http://{addr}/");
         }
     });
     let summary = run_job(&config, options).with_context(|| {
@@ -213,6 +242,42 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
         println!("stopped before its budget: continue it with --resume");
     }
     Ok(())
+}
+
+/// `coordinator dashboard STORE`: serves the page from a run's store until Ctrl-C.
+fn dashboard(store: &Path, listen: &str, token_file: Option<&Path>) -> anyhow::Result<()> {
+    let token = match std::env::var("AMORPH_TOKEN") {
+        Ok(token) if !token.trim().is_empty() => Some(token.trim().to_owned()),
+        _ => match token_file {
+            None => None,
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("--token-file {}", path.display()))?;
+                anyhow::ensure!(
+                    !text.trim().is_empty(),
+                    "--token-file {} is empty",
+                    path.display()
+                );
+                Some(text.trim().to_owned())
+            }
+        },
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    runtime.block_on(async {
+        let bound = amorph_coordinator::dashboard::bind(listen, token).await?;
+        let dashboard = bound.serve(store, None).await?;
+        eprintln!(
+            "coordinator: dashboard of {} on {} (Ctrl-C stops it)",
+            store.display(),
+            dashboard.url()
+        );
+        amorph_proto::signal::termination().await;
+        dashboard.shutdown().await;
+        Ok(())
+    })
 }
 
 /// Ctrl-C or SIGTERM asks the run to stop; everything finished is already in the run store.

@@ -196,7 +196,7 @@ pub fn default_token_path(credentials: &Path, name: &str) -> PathBuf {
 }
 
 /// Compares without an early exit, so response time does not leak how much of a guess was right.
-fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
+pub(crate) fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
 }
 

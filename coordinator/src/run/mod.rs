@@ -81,7 +81,7 @@ pub fn run(
             writer.history(row)?;
         }
         let migrations = search.migrate(config);
-        record_epoch(&search, &migrations, dims, ctx.store)?;
+        record_epoch(&search, &migrations, &rows, dims, ctx.store)?;
         // An observer hears of the epoch once the store holds it.
         ctx.progress.history(&rows);
         history.extend(rows);

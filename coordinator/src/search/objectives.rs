@@ -121,38 +121,22 @@ impl Pareto {
     /// The crowding rule: whether `newcomer` takes slot `slot` from its occupant among
     /// `occupants` (a child its dominant parent's, a migrant the slot it arrives at).
     pub fn replaces(&self, occupants: &[&Outcome], slot: usize, newcomer: &Outcome) -> bool {
-        let mut points: Vec<Vec<f64>> = occupants.iter().map(|o| self.point(o)).collect();
-        let point = self.point(newcomer);
-        if dominates(&point, &points[slot]) {
-            return true;
-        }
-        if dominates(&points[slot], &point) {
-            return false;
-        }
-        let before = standings(&points)[slot];
-        points[slot] = point;
-        stands_better(standings(&points)[slot], before)
+        let points: Vec<Vec<f64>> = occupants.iter().map(|o| self.point(o)).collect();
+        replaces(points, slot, self.point(newcomer))
     }
 
     /// Slots from the best standing to the worst (the lower slot on a tie).
     pub fn ranked(&self, outcomes: &[&Outcome]) -> Vec<usize> {
-        let standings = self.standings(outcomes);
-        let mut order: Vec<usize> = (0..outcomes.len()).collect();
-        order.sort_by(|&a, &b| {
-            (standings[a].0.cmp(&standings[b].0))
-                .then(standings[b].1.total_cmp(&standings[a].1))
-                .then(a.cmp(&b))
-        });
-        order
+        ranked(&outcomes.iter().map(|o| self.point(o)).collect::<Vec<_>>())
     }
 
     /// NSGA-II's cut: the indices of the `size` best-standing of `outcomes`, whole fronts first
     /// and the front that does not fit by room, in ascending order.
     pub fn survivors(&self, outcomes: &[&Outcome], size: usize) -> Vec<usize> {
-        let mut kept = self.ranked(outcomes);
-        kept.truncate(size);
-        kept.sort_unstable();
-        kept
+        survivors(
+            &outcomes.iter().map(|o| self.point(o)).collect::<Vec<_>>(),
+            size,
+        )
     }
 
     /// The hypervolume `outcomes` dominate up to the reference point (failures add nothing).
@@ -161,6 +145,41 @@ impl Pareto {
         let refs: Vec<&[f64]> = points.iter().map(Vec::as_slice).collect();
         hypervolume(&refs, &self.reference)
     }
+}
+
+/// The crowding rule on minimized points: whether `newcomer` takes slot `slot` of `points`. It
+/// does if it dominates the occupant, never if the occupant dominates it, and otherwise if it
+/// would stand better there than the occupant does.
+pub fn replaces(mut points: Vec<Vec<f64>>, slot: usize, newcomer: Vec<f64>) -> bool {
+    if dominates(&newcomer, &points[slot]) {
+        return true;
+    }
+    if dominates(&points[slot], &newcomer) {
+        return false;
+    }
+    let before = standings(&points)[slot];
+    points[slot] = newcomer;
+    stands_better(standings(&points)[slot], before)
+}
+
+/// Indices of minimized `points` from the best standing to the worst (the lower index on a tie).
+pub fn ranked(points: &[Vec<f64>]) -> Vec<usize> {
+    let standings = standings(points);
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        (standings[a].0.cmp(&standings[b].0))
+            .then(standings[b].1.total_cmp(&standings[a].1))
+            .then(a.cmp(&b))
+    });
+    order
+}
+
+/// NSGA-II's cut on minimized points: the `size` best-standing indices, in ascending order.
+pub fn survivors(points: &[Vec<f64>], size: usize) -> Vec<usize> {
+    let mut kept = ranked(points);
+    kept.truncate(size);
+    kept.sort_unstable();
+    kept
 }
 
 /// A run's non-dominated designs: its objectives, and each design's evaluation and values.

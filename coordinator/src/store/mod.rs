@@ -21,6 +21,8 @@
 //!   claim; where it disagreed, `claimed` keeps the claim and the evaluation row holds the outcome
 //!   that held.
 //! - `quarantine(worker, task_id, finished_unix)`: a worker caught disagreeing, and on which task.
+//! - `history(epoch, island, best_fitness, best_figure, mean_fitness, replacements, hypervolume)`:
+//!   `history.csv`'s rows (taken before the epoch's migration; the populations after it).
 //!
 //! Files: `records` (what a run writes), `read` (what a resume reads back), `peek` (read-only
 //! looks at a store a run may be writing), `schema` (the tables).
@@ -40,7 +42,7 @@ mod schema;
 mod tests;
 
 pub use records::{EpochRecord, EvaluationRecord, MigrationRecord, Purpose, StoredEvaluation};
-use schema::{SCHEMA, VERIFICATION_SCHEMA};
+use schema::{ADDED_SCHEMA, SCHEMA};
 
 const FORMAT: &str = "amorph-run-store-1";
 
@@ -58,7 +60,7 @@ pub enum StoreError {
     #[error("run store {0} does not exist: nothing to resume (run without --resume)")]
     Missing(PathBuf),
     #[error(
-        "run store {path} was made by a different config ({differs} differs); only [budget], [cluster] and results_dir may change on --resume"
+        "run store {path} was made by a different config ({differs} differs); only [budget], [cluster], [dashboard] and results_dir may change on --resume"
     )]
     ConfigChanged { path: PathBuf, differs: String },
     #[error("run store {path}: {message}")]
@@ -101,6 +103,7 @@ impl RunStore {
         let store = Self::open_file(&path)?;
         store.with(|c| {
             c.execute_batch(SCHEMA)?;
+            c.execute_batch(ADDED_SCHEMA)?;
             c.execute(
                 "INSERT INTO run(key, value) VALUES ('format', ?1), ('config', ?2)",
                 params![FORMAT, config_text(config)],
@@ -112,12 +115,16 @@ impl RunStore {
 
     /// Opens the store of an earlier run of this config to resume it. The config must be the one
     /// the store was made with, except for `[budget]` (a run may be extended).
+    ///
+    /// The tables and the index added since the first format are created here, so a store
+    /// written before they existed resumes with them (the tables empty).
     pub fn resume(config: &RunConfig) -> Result<Self> {
         let path = Self::path_for(config);
         if !path.exists() {
             return Err(StoreError::Missing(path));
         }
         let store = Self::open_file(&path)?;
+        store.with(|c| c.execute_batch(ADDED_SCHEMA))?;
         let stored: Option<(String, String)> = store.with(|c| {
             let get = |key: &str| {
                 c.query_row("SELECT value FROM run WHERE key = ?1", [key], |r| r.get(0))
@@ -177,13 +184,11 @@ impl RunStore {
         };
         // WAL: readers (a user's sqlite3 shell) never block the run; NORMAL sync keeps every
         // committed row across a crash of this process (not across a power cut, which is the
-        // price of not syncing each evaluation to disk). The verification tables are created on
-        // open, so a store written before they existed resumes with them empty.
+        // price of not syncing each evaluation to disk).
         store.with(|c| {
             c.pragma_update(None, "journal_mode", "WAL")?;
             c.pragma_update(None, "synchronous", "NORMAL")?;
             c.busy_timeout(std::time::Duration::from_secs(10))?;
-            c.execute_batch(VERIFICATION_SCHEMA)?;
             Ok(())
         })?;
         Ok(store)
@@ -213,11 +218,12 @@ fn config_text(config: &RunConfig) -> String {
 }
 
 /// The first key (dotted) whose value differs between two configs, ignoring `budget` (a run may
-/// be extended), `cluster` (how workers connect never changes a result) and `results_dir` (a
+/// be extended), `cluster` and `dashboard` (how workers connect and who watches never change a
+/// result) and `results_dir` (a
 /// stopped run's folder may be moved, e.g. from a lent machine to the one that finishes it: the
 /// store is found through the new path, so nothing of the old one is read).
 fn first_difference(a: &toml::Table, b: &toml::Table) -> Option<String> {
-    first_difference_except(a, b, &["budget", "cluster", "results_dir"])
+    first_difference_except(a, b, &["budget", "cluster", "dashboard", "results_dir"])
 }
 
 /// The first key (dotted, in sorted order) whose value differs, skipping top-level `ignored` keys.

@@ -7,6 +7,7 @@ use rusqlite::params;
 
 use super::{Result, RunStore, unix_now};
 use crate::ids::TaskId;
+use crate::summary::HistoryRow;
 
 /// Why a task was evaluated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -84,6 +85,8 @@ pub struct EpochRecord<'a> {
     /// Per island, per slot: (task id of the individual's evaluation, its fitness).
     pub populations: Vec<Vec<(TaskId, Option<f64>)>>,
     pub migrations: &'a [MigrationRecord],
+    /// Each island's `history.csv` row for the epoch.
+    pub history: &'a [HistoryRow],
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -220,6 +223,20 @@ impl RunStore {
                         m.emigrant_slot as i64,
                         m.replaced_slot.map(|s| s as i64),
                         m.task_id.0 as i64
+                    ])?;
+                }
+                let mut row = tx.prepare_cached(
+                    "INSERT OR REPLACE INTO history(epoch, island, best_fitness, best_figure, mean_fitness, replacements, hypervolume) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
+                )?;
+                for h in epoch.history {
+                    row.execute(params![
+                        epoch.epoch as i64,
+                        h.island,
+                        h.best_fitness,
+                        h.best_figure,
+                        h.mean_fitness,
+                        h.replacements as i64,
+                        h.hypervolume
                     ])?;
                 }
             }

@@ -42,7 +42,8 @@ CREATE INDEX migration_epoch ON migration(epoch);
 CREATE TABLE task_error (task_id INTEGER NOT NULL, worker TEXT NOT NULL, message TEXT NOT NULL);
 ";
 
-pub(super) const VERIFICATION_SCHEMA: &str = "
+/// Tables added since the first format, created on open, so an older store gains them empty.
+pub(super) const ADDED_SCHEMA: &str = "
 CREATE TABLE IF NOT EXISTS unchecked (task_id INTEGER PRIMARY KEY);
 CREATE TABLE IF NOT EXISTS verification (
     task_id INTEGER NOT NULL,
@@ -53,4 +54,17 @@ CREATE TABLE IF NOT EXISTS verification (
     finished_unix REAL NOT NULL
 );
 CREATE TABLE IF NOT EXISTS quarantine (worker TEXT NOT NULL, task_id INTEGER NOT NULL, finished_unix REAL NOT NULL);
+-- When and by whom each evaluation finished, apart from its large genome and outcome: a watcher
+-- counts evaluations, measures rates and sums them per worker from this index alone.
+CREATE INDEX IF NOT EXISTS evaluation_finished ON evaluation(finished_unix, worker);
+CREATE TABLE IF NOT EXISTS history (
+    epoch INTEGER NOT NULL,
+    island INTEGER NOT NULL,
+    best_fitness REAL,
+    best_figure REAL,
+    mean_fitness REAL,
+    replacements INTEGER NOT NULL,
+    hypervolume REAL,
+    PRIMARY KEY (epoch, island)
+);
 ";

@@ -33,6 +33,7 @@
 mod rules;
 mod share;
 mod task;
+mod view;
 mod worker_calls;
 
 #[cfg(test)]
@@ -57,6 +58,7 @@ use crate::ids::{TaskId, WorkerId};
 use crate::principal::{Principal, Sessions};
 pub use rules::{Disposition, MAX_WORKERS, NotedError, QueueError, QueueRules, QueueStats};
 use task::{Phase, TaskState, Voice};
+pub use view::WorkerView;
 
 /// Who makes a call: a worker id, the principal the call's credential proves, and the session
 /// secret the worker's registration returned.

@@ -43,6 +43,7 @@ impl Search {
 pub(in crate::run) fn record_epoch(
     search: &Search,
     migrations: &[MigrationRecord],
+    history: &[HistoryRow],
     dims: GridDims,
     store: &RunStore,
 ) -> Result<()> {
@@ -76,11 +77,13 @@ pub(in crate::run) fn record_epoch(
     store.record_epoch(&EpochRecord {
         epoch: search.ledger.epoch,
         evaluations: search.ledger.evaluations,
-        wall_seconds: search.clock.seconds(),
+        // The epoch's one wall time: the one its history rows carry.
+        wall_seconds: (history.first()).map_or_else(|| search.clock.seconds(), |h| h.wall_seconds),
         resolution: dims.to_string(),
         best_fitness: search.best().outcome.fitness(),
         populations,
         migrations,
+        history,
     })?;
     Ok(())
 }
