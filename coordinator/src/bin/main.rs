@@ -246,22 +246,8 @@ fn try_main(cli: Cli) -> anyhow::Result<()> {
 
 /// `coordinator dashboard STORE`: serves the page from a run's store until Ctrl-C.
 fn dashboard(store: &Path, listen: &str, token_file: Option<&Path>) -> anyhow::Result<()> {
-    let token = match std::env::var("AMORPH_TOKEN") {
-        Ok(token) if !token.trim().is_empty() => Some(token.trim().to_owned()),
-        _ => match token_file {
-            None => None,
-            Some(path) => {
-                let text = std::fs::read_to_string(path)
-                    .with_context(|| format!("--token-file {}", path.display()))?;
-                anyhow::ensure!(
-                    !text.trim().is_empty(),
-                    "--token-file {} is empty",
-                    path.display()
-                );
-                Some(text.trim().to_owned())
-            }
-        },
-    };
+    let token = amorph_coordinator::cluster::settings::shared_token(token_file, "--token-file")
+        .map_err(anyhow::Error::msg)?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

@@ -2,7 +2,7 @@
 //! ([`ClusterSettings`]: durations, counts and paths checked once, by `TryFrom`, with every bound
 //! named by its key). Nothing here changes a run's result, so it may differ when a run is resumed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
@@ -134,24 +134,28 @@ impl Default for ClusterSection {
 impl ClusterSection {
     /// The shared secret: AMORPH_TOKEN, else the token file, else none.
     pub fn token(&self) -> Result<Option<String>, String> {
-        if let Ok(token) = std::env::var("AMORPH_TOKEN")
-            && !token.trim().is_empty()
-        {
-            return Ok(Some(token.trim().to_owned()));
-        }
-        match &self.token_file {
-            None => Ok(None),
-            Some(path) => {
-                let text = std::fs::read_to_string(path)
-                    .map_err(|e| format!("cluster.token_file {}: {e}", path.display()))?;
-                let token = text.trim();
-                if token.is_empty() {
-                    return Err(format!("cluster.token_file {} is empty", path.display()));
-                }
-                Ok(Some(token.to_owned()))
-            }
-        }
+        shared_token(self.token_file.as_deref(), "cluster.token_file")
     }
+}
+
+/// The shared secret: AMORPH_TOKEN, else the contents of `file` (surrounding whitespace
+/// ignored; an empty file is an error), else none. `named` names the file's setting in messages.
+pub fn shared_token(file: Option<&Path>, named: &str) -> Result<Option<String>, String> {
+    if let Ok(token) = std::env::var("AMORPH_TOKEN")
+        && !token.trim().is_empty()
+    {
+        return Ok(Some(token.trim().to_owned()));
+    }
+    let Some(path) = file else {
+        return Ok(None);
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| format!("{named} {}: {e}", path.display()))?;
+    let token = text.trim();
+    if token.is_empty() {
+        return Err(format!("{named} {} is empty", path.display()));
+    }
+    Ok(Some(token.to_owned()))
 }
 
 /// The `[cluster]` section, checked.

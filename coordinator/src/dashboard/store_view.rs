@@ -15,6 +15,7 @@ use amorph::genome::Genome;
 use amorph::task::{Outcome, Scene};
 use amorph::voxel::GridDims;
 use rusqlite::{Connection, OpenFlags, OptionalExtension};
+use serde::Deserialize;
 
 use super::status::{
     Best, HistoryPoint, IslandRow, Migration, Progress, RunInfo, Status, Verification, WorkerRow,
@@ -48,6 +49,16 @@ pub struct StoreView {
     /// it for writing; this view only reads).
     has_history: bool,
     has_checks: bool,
+    /// What changes only when an epoch is recorded, read with the last epoch read.
+    at_epoch: Option<AtEpoch>,
+}
+
+/// The best design, the islands and the latest migrations as of the last epoch read.
+#[derive(Debug)]
+struct AtEpoch {
+    best: Option<Best>,
+    islands: Vec<IslandRow>,
+    migrations: Vec<Migration>,
 }
 
 impl StoreView {
@@ -94,6 +105,7 @@ impl StoreView {
             last_epoch: None,
             has_history,
             has_checks,
+            at_epoch: None,
         })
     }
 
@@ -127,7 +139,14 @@ impl StoreView {
     }
 
     fn read(&mut self, now_unix: Option<f64>) -> Result<Status, Read> {
-        self.read_new_epochs()?;
+        if self.read_new_epochs()? || self.at_epoch.is_none() {
+            self.at_epoch = Some(AtEpoch {
+                best: self.best()?,
+                islands: self.islands()?,
+                migrations: self.migrations()?,
+            });
+        }
+        let at_epoch = self.at_epoch.as_ref().expect("read above");
         let scene = &self.config.scene;
         let (evaluations, last_finished): (i64, Option<f64>) = self.conn.query_row(
             "SELECT COUNT(*), MAX(finished_unix) FROM evaluation",
@@ -161,7 +180,6 @@ impl StoreView {
                 _ => None,
             },
         };
-        let best = self.best()?;
         let run = RunInfo {
             name: self.config.name.clone(),
             task: scene.kind().to_owned(),
@@ -178,9 +196,9 @@ impl StoreView {
             run,
             progress,
             history: self.history.clone(),
-            best,
-            islands: self.islands()?,
-            migrations: self.migrations()?,
+            best: at_epoch.best.clone(),
+            islands: at_epoch.islands.clone(),
+            migrations: at_epoch.migrations.clone(),
             workers: self.workers(since, now, span)?,
             queue: None,
             verification: self.verification()?,
@@ -188,9 +206,10 @@ impl StoreView {
         })
     }
 
-    /// The history rows of the epochs recorded since the last poll. The run writes an epoch's
-    /// row and its populations in one transaction, so an epoch is read whole or not at all.
-    fn read_new_epochs(&mut self) -> Result<(), Read> {
+    /// The history rows of the epochs recorded since the last poll, and whether there were
+    /// any. The run writes an epoch's row, its populations and its migrations in one
+    /// transaction, so an epoch is read whole or not at all.
+    fn read_new_epochs(&mut self) -> Result<bool, Read> {
         let after = self.last_epoch.unwrap_or(-1);
         let epochs: Vec<(i64, i64, f64, String)> = {
             let mut stmt = self.conn.prepare(
@@ -239,7 +258,7 @@ impl StoreView {
             self.last_populations = islands;
             self.last_epoch = Some(epoch);
         }
-        Ok(())
+        Ok(self.last_epoch.unwrap_or(-1) != after)
     }
 
     /// The epoch's rows of the `history` table (empty for a store written before it existed).
@@ -329,8 +348,10 @@ impl StoreView {
                 "table population names task {task}, which table evaluation lacks"
             )));
         };
-        let outcome: Outcome = serde_json::from_str(&outcome_json)
-            .map_err(|e| Read::Corrupt(format!("evaluation {task}: its outcome: {e}")))?;
+        let corrupt =
+            |e: serde_json::Error| Read::Corrupt(format!("evaluation {task}: its outcome: {e}"));
+        let stored: serde_json::Value = serde_json::from_str(&outcome_json).map_err(corrupt)?;
+        let outcome = Outcome::deserialize(&stored).map_err(corrupt)?;
         let scene = &self.config.scene;
         Ok(Some(Best {
             task_id: task,
@@ -342,7 +363,7 @@ impl StoreView {
             figure: scene.figure(&outcome),
             headline: scene.headline(&outcome),
             summary: outcome.fitness().map(|_| scene.summary(&outcome)),
-            outcome: serde_json::from_str(&outcome_json).unwrap_or_default(),
+            outcome: stored,
         }))
     }
 
