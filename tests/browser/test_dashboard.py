@@ -93,7 +93,8 @@ def test_live_then_from_the_store(browser, tmp_path):
     try:
         started = time.monotonic()
         page.goto(run.url)
-        assert page.title().endswith("Amorph")
+        # The static page's title, then the run's name once the first status has arrived.
+        page.wait_for_function("document.title === 'small · Amorph'", timeout=30_000)
         page.wait_for_function(
             "document.querySelector('#run-mode').textContent === 'live'", timeout=30_000)
         # The first epoch's points, then more: the page follows the run without a reload.
