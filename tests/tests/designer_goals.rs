@@ -31,7 +31,7 @@ fn every_config_in_configs_loads_and_survives_its_own_effective_config() {
         assert_eq!(again.scene, config.scene, "{}", path.display());
         seen += 1;
     }
-    assert_eq!(seen, 13, "the configs a user chooses from");
+    assert_eq!(seen, 14, "the configs a user chooses from");
 }
 
 /// Every base config the tests start from (`tests/fixtures/configs/`, read by

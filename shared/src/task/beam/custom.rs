@@ -47,9 +47,9 @@ pub enum TargetError {
 /// A designer's profile as written (points, or the CSV file they came from) and the normalized
 /// curve the fitness reads.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "RawProfile", into = "RawProfile")]
+#[serde(try_from = "WrittenProfile", into = "WrittenProfile")]
 pub struct CustomProfile {
-    raw: RawProfile,
+    written: WrittenProfile,
     curve: Curve,
 }
 
@@ -58,7 +58,7 @@ pub struct CustomProfile {
 /// since.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawProfile {
+struct WrittenProfile {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     points: Vec<[f64; 2]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -75,28 +75,28 @@ struct Curve {
     slope: Vec<f64>,
 }
 
-impl TryFrom<RawProfile> for CustomProfile {
+impl TryFrom<WrittenProfile> for CustomProfile {
     type Error = TargetError;
 
-    fn try_from(raw: RawProfile) -> Result<Self, TargetError> {
-        if raw.points.is_empty() && raw.csv.is_none() {
+    fn try_from(written: WrittenProfile) -> Result<Self, TargetError> {
+        if written.points.is_empty() && written.csv.is_none() {
             return Err(TargetError::Profile(
                 "a custom target needs `points` or `csv`".into(),
             ));
         }
         // A CSV not yet loaded has no curve; `load_csv` builds it (a config does on loading).
-        let curve = if raw.points.is_empty() {
+        let curve = if written.points.is_empty() {
             Curve::default()
         } else {
-            Curve::new(&raw.points, raw.interpolation)?
+            Curve::new(&written.points, written.interpolation)?
         };
-        Ok(Self { raw, curve })
+        Ok(Self { written, curve })
     }
 }
 
-impl From<CustomProfile> for RawProfile {
+impl From<CustomProfile> for WrittenProfile {
     fn from(p: CustomProfile) -> Self {
-        p.raw
+        p.written
     }
 }
 
@@ -106,7 +106,7 @@ impl CustomProfile {
         points: Vec<[f64; 2]>,
         interpolation: Interpolation,
     ) -> Result<Self, TargetError> {
-        Self::try_from(RawProfile {
+        Self::try_from(WrittenProfile {
             points,
             csv: None,
             interpolation,
@@ -116,10 +116,10 @@ impl CustomProfile {
     /// Reads the CSV file the profile names, relative to `base_dir` (the config's folder), unless
     /// its points are already there.
     pub fn load_csv(&mut self, base_dir: &Path) -> Result<(), TargetError> {
-        let Some(file) = &self.raw.csv else {
+        let Some(file) = &self.written.csv else {
             return Ok(());
         };
-        if !self.raw.points.is_empty() {
+        if !self.written.points.is_empty() {
             return Ok(());
         }
         let path = base_dir.join(file);
@@ -128,8 +128,8 @@ impl CustomProfile {
             message: e.to_string(),
         })?;
         let points = parse_csv(&text, &path.display().to_string())?;
-        self.curve = Curve::new(&points, self.raw.interpolation)?;
-        self.raw.points = points;
+        self.curve = Curve::new(&points, self.written.interpolation)?;
+        self.written.points = points;
         Ok(())
     }
 
@@ -139,7 +139,7 @@ impl CustomProfile {
                 "target.csv",
                 format!(
                     "{} has not been loaded (a config loads it relative to its own folder)",
-                    self.raw.csv.as_deref().unwrap_or("-")
+                    self.written.csv.as_deref().unwrap_or("-")
                 ),
             ));
         }
@@ -148,9 +148,9 @@ impl CustomProfile {
 
     /// "my_profile.csv" or "custom (N points)".
     pub fn label(&self) -> String {
-        match &self.raw.csv {
+        match &self.written.csv {
             Some(file) => file.clone(),
-            None => format!("custom ({} points)", self.raw.points.len()),
+            None => format!("custom ({} points)", self.written.points.len()),
         }
     }
 
