@@ -26,14 +26,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 SEEDS = [1, 2, 3, 4, 5]
 SELECTIONS = ["nsga2", "crowding"]
-# Each problem's points are minimized: the robot's travel enters negated.
+# `objectives` reads a design's two objectives as the config names them; `sign` turns the first
+# into one to minimize (the robot's travel is maximized), the voxels are minimized as they are.
 PROBLEMS = {
     "robot": dict(config="locomotion_pareto.toml", level="[[6, 6, 6]]", evaluations=1500,
                   reference=(0.0, 216.0), first="best travel", unit="mm", sign=-1.0,
-                  point=lambda m: (-1000.0 * m["locomotion"]["gait_displacement"], m["locomotion"]["voxels"])),
+                  objectives=lambda m: (1000.0 * m["locomotion"]["gait_displacement"], m["locomotion"]["voxels"])),
     "beam": dict(config="beam_pareto.toml", level="[[6, 20, 6]]", evaluations=6000,
                  reference=(10.0, 720.0), first="best RMS", unit="%", sign=1.0,
-                 point=lambda m: (m["beam"]["rms_percent"], m["beam"]["voxels"])),
+                 objectives=lambda m: (m["beam"]["rms_percent"], m["beam"]["voxels"])),
 }
 
 
@@ -51,13 +52,17 @@ def run(problem, results, selection, seed):
     return results / name / "run.sqlite"
 
 
+def minimized(problem, values):
+    return (problem["sign"] * values[0], values[1])
+
+
 def points(problem, store):
     """Each evaluation's minimized objectives, in the order the run made them; None for a failure."""
     rows = sqlite3.connect(store).execute("select outcome from evaluation order by task_id")
     out = []
     for (outcome,) in rows:
         evaluated = json.loads(outcome).get("evaluated")
-        out.append(evaluated and problem["point"](evaluated["metrics"]))
+        out.append(evaluated and minimized(problem, problem["objectives"](evaluated["metrics"])))
     return out
 
 
@@ -75,7 +80,7 @@ def hypervolume(front, reference):
 
 def curve(problem, store):
     """The front's hypervolume after each evaluation."""
-    reference = (problem["sign"] * problem["reference"][0], problem["reference"][1])
+    reference = minimized(problem, problem["reference"])
     front, out = [], []
     for p in points(problem, store):
         if p and not any(q[0] <= p[0] and q[1] <= p[1] for q in front):
