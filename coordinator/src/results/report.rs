@@ -147,7 +147,7 @@ fn front_section(report: &mut Report, front: &Front) {
     report.push(Block::Heading("Trade-offs".into()));
     let names: Vec<&str> = front.objectives.iter().map(|o| o.name).collect();
     report.push(Block::Paragraph(format!(
-        "{} designs on the Pareto front of {} at the final resolution (the designs the run evaluated there that no other beats in every objective), dominating a hypervolume of {:e}. `pareto.csv` lists them all; `worker export --run <this folder> --design ID` exports any of them.",
+        "{} designs on the Pareto front of {} at the final resolution (the designs the run evaluated there that no other beats in every objective), dominating a hypervolume of {:.3e} against the config's `hypervolume_reference`. `pareto.csv` lists them all; `worker export --run <this folder> --design ID` exports any of them.",
         front.members.len(),
         names.join(" against "),
         front.hypervolume

@@ -9,7 +9,7 @@ use amorph::material::{MaterialId, Palette};
 use amorph::voxel::GridDims;
 use proptest::prelude::*;
 
-mod common;
+use crate::common;
 use common::grid_from;
 
 fn signed_area(contour: &[[i64; 2]]) -> i64 {

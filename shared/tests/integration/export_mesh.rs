@@ -10,7 +10,7 @@ use amorph::material::MaterialId;
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
 
-mod common;
+use crate::common;
 use common::grid_from;
 
 /// Checks the mesh is a closed oriented 2-manifold surface: every undirected edge is used by

@@ -3,7 +3,7 @@
 
 use amorph_tests::{run_locally, scratch_dir, small_beam_config};
 
-mod report_check;
+use crate::report_check;
 
 #[test]
 fn same_seed_gives_bit_identical_populations_on_1_2_and_3_threads() {

@@ -9,7 +9,7 @@ use amorph::task::Scene;
 use amorph::task::locomotion::simulate_locomotion;
 use amorph::voxel::{GridDims, VoxelGrid};
 
-mod common;
+use crate::common;
 
 /// A 14×9×6 body (about 700 voxels and 1,900 links, so several parts of each at the parallel
 /// pass's grain) with holes, so that the link pass meets both runs of four and scattered links:

@@ -10,7 +10,7 @@ use amorph::task::locomotion::{
 };
 use amorph::voxel::{GridDims, VoxelGrid};
 
-mod common;
+use crate::common;
 
 /// The short walker of the export tests, switched on three times a tenth of a period apart, far
 /// enough for three different gaits.

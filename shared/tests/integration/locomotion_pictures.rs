@@ -7,7 +7,7 @@ use amorph::task::locomotion::{
     simulate_locomotion, simulate_locomotion_observed, trajectory_csv, trajectory_plot,
 };
 
-mod common;
+use crate::common;
 use common::short_walker as walker;
 
 #[test]

@@ -9,18 +9,18 @@ use amorph::task::{Metrics, Scene};
 use amorph_coordinator::RunConfig;
 use amorph_tests::{ClusterRun, run_locally, scratch_dir, test_config};
 
-mod report_check;
+use crate::report_check;
 
 /// A tiny walking-robot run: 4x4x4 designs, a short settle and two actuation cycles, so the test
 /// checks the plumbing (scene parsing, evaluation, outcomes, results) in seconds, not the physics
-/// (which `shared/tests/dynamics_*.rs` check against analytic references).
+/// (which `shared/tests/integration/dynamics_*.rs` check against analytic references).
 fn tiny_locomotion_config(results_dir: &Path, seed: u64) -> RunConfig {
     test_config("locomotion_tiny", results_dir, &[&format!("seed={seed}")])
 }
 
 /// `cluster.threads_per_evaluation`: the coordinator's local workers run each evaluation inside a
 /// pool of that many threads, and the run is the one the calling-thread evaluators give (the
-/// simulation's own bit-identity across thread counts is `shared/tests/dynamics_threads.rs`).
+/// simulation's own bit-identity across thread counts is `shared/tests/integration/dynamics_threads.rs`).
 #[test]
 fn local_workers_sharing_each_evaluation_among_threads_give_the_same_run() {
     let alone = {
