@@ -9,8 +9,7 @@ use amorph::material::{MaterialId, Palette};
 use amorph::voxel::GridDims;
 use proptest::prelude::*;
 
-use crate::common;
-use common::grid_from;
+use crate::common::grid_from;
 
 fn signed_area(contour: &[[i64; 2]]) -> i64 {
     let n = contour.len();

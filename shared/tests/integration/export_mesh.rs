@@ -10,8 +10,7 @@ use amorph::material::MaterialId;
 use amorph::voxel::{GridDims, VoxelGrid};
 use proptest::prelude::*;
 
-use crate::common;
-use common::grid_from;
+use crate::common::grid_from;
 
 /// Checks the mesh is a closed oriented 2-manifold surface: every undirected edge is used by
 /// exactly two triangles, once in each direction, and no two vertices share a position (so the

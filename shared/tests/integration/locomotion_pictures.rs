@@ -7,8 +7,7 @@ use amorph::task::locomotion::{
     simulate_locomotion, simulate_locomotion_observed, trajectory_csv, trajectory_plot,
 };
 
-use crate::common;
-use common::short_walker as walker;
+use crate::common::short_walker as walker;
 
 #[test]
 fn observing_a_walk_leaves_it_bit_identical() {
