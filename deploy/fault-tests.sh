@@ -31,7 +31,7 @@ cleanup() {
 trap cleanup EXIT
 log() { echo "fault-tests: $*"; }
 
-# A beam run long enough to break things in the middle (~0.3 s per evaluation, 2 workers): the
+# A beam run long enough to break things in the middle (~0.1 s per evaluation, 2 workers): the
 # test fixture, copied where the containers mount it (/config/run.toml).
 cp "$root/tests/fixtures/configs/fault_beam.toml" "$AMORPH_CONFIG"
 budget="$(sed -n 's/^evaluations = //p' "$AMORPH_CONFIG")"

@@ -3,21 +3,16 @@
 # holding the binary (debug info stripped), exactly the shared libraries it links and the dynamic
 # loader, found with ldd on this machine, plus the Dockerfile (FROM scratch). No image is pulled.
 #
-#   deploy/stage.sh [release|debug]    (default release; debug reuses the binaries `cargo test
-#                                        --workspace` just built, building them only if missing)
+#   deploy/stage.sh [release|debug]    (default release; debug reuses what `cargo test
+#                                        --workspace` built)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 profile="${1:-release}"
 cd "$root"
 case "$profile" in
   release) cargo build --release --locked --bin coordinator --bin worker; dir=release ;;
-  # A separate `cargo build` would re-resolve features without the tests' dev-dependencies and
-  # recompile half the tree; the test build's binaries are the same code.
-  debug)
-    dir=debug
-    [ -x target/debug/coordinator ] && [ -x target/debug/worker ] ||
-      cargo build --locked --bin coordinator --bin worker
-    ;;
+  # After `cargo test --workspace` this compiles nothing: the features agree (shared/Cargo.toml).
+  debug) cargo build --locked --bin coordinator --bin worker; dir=debug ;;
   *) echo "stage.sh: profile must be release or debug, not '$profile'" >&2; exit 2 ;;
 esac
 for bin in coordinator worker; do

@@ -19,3 +19,4 @@ mod search_finest_fraction;
 mod search_operators;
 mod search_pareto;
 mod search_skip_unchanged;
+mod user_docs_shape;
