@@ -34,6 +34,35 @@ pub fn scratch_dir(test: &str) -> PathBuf {
     dir
 }
 
+/// The repository's root folder, where the README, docs/ and configs/ are.
+pub fn repository_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Every file under `dir` (its subfolders too, but no hidden folder and no `target/`) whose
+/// extension is one of `extensions`, sorted.
+pub fn files_under(dir: &Path, extensions: &[&str]) -> Vec<PathBuf> {
+    let (mut files, mut folders) = (Vec::new(), vec![dir.to_owned()]);
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy();
+            if path.is_dir() {
+                if !name.starts_with('.') && name != "target" {
+                    folders.push(path);
+                }
+            } else if path
+                .extension()
+                .is_some_and(|e| extensions.iter().any(|x| e == *x))
+            {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
 /// The base run configs tests start from: `tests/fixtures/configs/<base>.toml`, each a complete
 /// config (see the comment on its first line).
 pub fn fixture_config(base: &str) -> PathBuf {

@@ -1,7 +1,7 @@
-//! Goals a designer writes. Every config in `configs/` (and every base config the tests start
-//! from) loads; the stiffness task evolves a design that beats the layouts beam theory ranks below
-//! the I-beam; a custom profile runs end to end and is labelled as custom in the summary and
-//! report.
+//! Goals a designer writes. Every config in `configs/` loads, is headed by what it runs and is in
+//! the README's table (every base config the tests start from loads too); the stiffness task
+//! evolves a design that beats the layouts beam theory ranks below the I-beam; a custom profile
+//! runs end to end and is labelled as custom in the summary and report.
 
 use std::path::Path;
 
@@ -14,8 +14,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 #[test]
-fn every_config_in_configs_loads_and_survives_its_own_effective_config() {
+fn every_config_in_configs_loads_says_what_it_runs_and_survives_its_own_effective_config() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs");
+    let readme = std::fs::read_to_string(dir.join("../README.md")).unwrap();
     let mut seen = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
@@ -23,6 +24,18 @@ fn every_config_in_configs_loads_and_survives_its_own_effective_config() {
             continue;
         }
         let config = RunConfig::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        // A user picks a config by its first lines and finds it in the README's table.
+        let text = std::fs::read_to_string(&path).unwrap();
+        let heading = text.lines().take_while(|l| l.starts_with('#')).count();
+        let name = path.file_name().unwrap().to_string_lossy();
+        assert!(
+            (1..=3).contains(&heading),
+            "{name} starts with {heading} comment lines; one to three say what it runs"
+        );
+        assert!(
+            readme.contains(&format!("`{name}`")),
+            "{name} is not in the README's table"
+        );
         // The effective config a run writes (and a resume reads back, from anywhere) is the same
         // run: files it named are inside it.
         let text = toml::to_string_pretty(&config.to_raw()).unwrap();

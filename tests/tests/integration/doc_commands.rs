@@ -5,14 +5,12 @@
 //! reads. A renamed key, flag or config file in the docs fails here instead of in a user's
 //! terminal.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
-use amorph_tests::{binary, run_locally, scratch_dir, test_config};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use amorph_tests::{
+    binary, files_under, repository_root as root, run_locally, scratch_dir, test_config,
+};
 
 /// A documented `cargo run [--release] --bin NAME -- ARGS` command: the binary's name and its
 /// arguments.
@@ -77,18 +75,7 @@ impl CargoRun {
 /// The Markdown files a user reads: the README and everything under docs/.
 fn pages() -> Vec<PathBuf> {
     let mut pages = vec![root().join("README.md")];
-    let mut folders = vec![root().join("docs")];
-    while let Some(folder) = folders.pop() {
-        for entry in std::fs::read_dir(&folder).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                folders.push(path);
-            } else if path.extension().is_some_and(|e| e == "md") {
-                pages.push(path);
-            }
-        }
-    }
-    pages.sort();
+    pages.extend(files_under(&root().join("docs"), &["md"]));
     pages
 }
 

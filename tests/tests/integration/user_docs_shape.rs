@@ -1,27 +1,11 @@
 //! The user's documents keep the shape the project promises: a README a newcomer reads in one
-//! sitting, a manual rather than a notebook, and configs that say in a few lines what they run.
-//! The limits are the product's own (README at most 150 lines, docs/ at most 3,000 in all, at
-//! most three comment lines heading a config), so a page that grows past them fails here.
+//! sitting and a manual rather than a notebook. The limits are the product's own (README at most
+//! 150 lines, docs/ at most 3,000 in all), so a page that grows past them fails here. The configs'
+//! headings are checked where every config is loaded (designer_goals.rs).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn files_under(dir: &Path, extension: &str, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        let name = path.file_name().unwrap().to_string_lossy().into_owned();
-        if path.is_dir() {
-            if !name.starts_with('.') && name != "target" && name != "node_modules" {
-                files_under(&path, extension, out);
-            }
-        } else if path.extension().is_some_and(|e| e == extension) {
-            out.push(path);
-        }
-    }
-}
+use amorph_tests::{files_under, repository_root as root};
 
 fn lines(path: &Path) -> usize {
     std::fs::read_to_string(path).unwrap().lines().count()
@@ -35,8 +19,7 @@ fn the_readme_fits_in_150_lines() {
 
 #[test]
 fn the_manual_fits_in_3000_lines() {
-    let mut pages = Vec::new();
-    files_under(&root().join("docs"), "md", &mut pages);
+    let pages = files_under(&root().join("docs"), &["md"]);
     let total: usize = pages.iter().map(|p| lines(p)).sum();
     assert!(!pages.is_empty());
     assert!(
@@ -81,9 +64,7 @@ fn no_document_config_or_source_numbers_sessions() {
         ("tests", &["rs", "sh", "py"]),
         ("python", &["rs", "py", "md"]),
     ] {
-        for extension in extensions {
-            files_under(&root().join(dir), extension, &mut files);
-        }
+        files.extend(files_under(&root().join(dir), extensions));
     }
     for top in ["README.md", "ARCHITECTURE.md", ".ci/run"] {
         files.push(root().join(top));
@@ -94,25 +75,4 @@ fn no_document_config_or_source_numbers_sessions() {
         .map(|p| p.strip_prefix(root()).unwrap_or(p).display().to_string())
         .collect();
     assert!(offenders.is_empty(), "numbered sessions in {offenders:?}");
-}
-
-#[test]
-fn every_config_says_what_it_runs_in_three_lines_and_is_in_the_readme() {
-    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
-    let mut configs = Vec::new();
-    files_under(&root().join("configs"), "toml", &mut configs);
-    assert!(!configs.is_empty());
-    for config in configs {
-        let text = std::fs::read_to_string(&config).unwrap();
-        let heading = text.lines().take_while(|l| l.starts_with('#')).count();
-        let name = config.file_name().unwrap().to_string_lossy().into_owned();
-        assert!(
-            (1..=3).contains(&heading),
-            "{name} starts with {heading} comment lines; one to three say what it runs"
-        );
-        assert!(
-            readme.contains(&format!("`{name}`")),
-            "{name} is not in the README's table"
-        );
-    }
 }
