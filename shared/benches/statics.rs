@@ -2,12 +2,15 @@
 //! boxes whose hard/soft (1000:1) pattern is a seeded random Gaussian-mixture genome.
 //!
 //! `cargo bench -p amorph --bench statics -- --warm-up-time 1 --measurement-time 3`
+//!
+//! A method named `..._baseline_loops` is the same solve on the loops a CPU without AVX2 runs
+//! (`statics::baseline_only`), measured right after the wide loops' run of it.
 
 use std::hint::black_box;
 
 use amorph::genome::{GenomeLimits, random_genome};
 use amorph::material::{MaterialId, Palette};
-use amorph::statics::{StaticLoadCase, StaticModel, StaticSolverParams, solve};
+use amorph::statics::{StaticLoadCase, StaticModel, StaticSolverParams, baseline_only, solve};
 use amorph::voxel::{GridDims, VoxelGrid, voxelize};
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::SeedableRng;
@@ -64,16 +67,22 @@ fn bench_case(
     let model = StaticModel::new(grid, &palette, BEAM_LENGTH / dims.ny as f64).unwrap();
     let case = cantilever(&model);
     for (method, params) in methods {
+        let run = || {
+            let solve = || solve(black_box(&model), black_box(&case), params).unwrap();
+            if method.ends_with("_baseline_loops") {
+                baseline_only(solve)
+            } else {
+                solve()
+            }
+        };
         let start = std::time::Instant::now();
-        let solution = solve(&model, &case, params).unwrap();
+        let solution = run();
         eprintln!(
             "{name}_{method}: first solve {:.3} s, {:?}",
             start.elapsed().as_secs_f64(),
             solution.diagnostics
         );
-        c.bench_function(&format!("{name}_{method}"), |b| {
-            b.iter(|| solve(black_box(&model), black_box(&case), params).unwrap())
-        });
+        c.bench_function(&format!("{name}_{method}"), |b| b.iter(run));
     }
 }
 
@@ -81,6 +90,10 @@ fn statics(c: &mut Criterion) {
     let direct = ("direct", StaticSolverParams::direct());
     let multigrid = ("multigrid", StaticSolverParams::multigrid_pcg());
     let jacobi = ("block_jacobi", StaticSolverParams::block_jacobi_pcg());
+    let multigrid_baseline = (
+        "multigrid_baseline_loops",
+        StaticSolverParams::multigrid_pcg(),
+    );
 
     let grid = two_material(GridDims::new(12, 40, 12), 7);
     c.bench_function("static_model_build_12x40x12", |b| {
@@ -103,7 +116,12 @@ fn statics(c: &mut Criterion) {
         c,
         "static_solve_12x40x12_two_material",
         &two_material(GridDims::new(12, 40, 12), 7),
-        &[direct.clone(), multigrid.clone(), jacobi],
+        &[
+            direct.clone(),
+            multigrid.clone(),
+            multigrid_baseline,
+            jacobi,
+        ],
     );
     if std::env::var_os("AMORPH_BENCH_LARGE").is_some() {
         bench_case(

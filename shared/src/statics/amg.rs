@@ -18,6 +18,7 @@ use super::params::MultigridParams;
 use super::pcg::{Precondition, inverse_diagonal_blocks};
 use super::single::{Block32, BlockMatrix32, block32};
 use super::spgemm::multiply;
+use super::wide::with_wide_vectors;
 
 /// One level of the V-cycle, in single precision.
 #[derive(Debug)]
@@ -167,6 +168,20 @@ fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: 
 /// The smoothed prolongator P = (I − ω D⁻¹ A) P_tent, with P_tent = one block Q_i per row at the
 /// node's aggregate.
 fn smoothed_prolongator(
+    a: &BlockMatrix,
+    inverse_diagonal: &[Block],
+    q: &[Block],
+    aggregate_of: &[u32],
+    omega: f64,
+) -> BlockMatrix {
+    with_wide_vectors(
+        #[inline(always)]
+        || smoothed_rows(a, inverse_diagonal, q, aggregate_of, omega),
+    )
+}
+
+#[inline(always)]
+fn smoothed_rows(
     a: &BlockMatrix,
     inverse_diagonal: &[Block],
     q: &[Block],

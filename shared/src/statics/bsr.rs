@@ -2,6 +2,7 @@
 //! unknowns, so one column index serves 36 values and the inner loops are fixed-size.
 
 use super::element::Block;
+use super::wide::with_wide_vectors;
 
 /// A square block-sparse matrix, full (not triangular) storage, columns sorted in each row.
 #[derive(Clone, Debug, Default)]
@@ -68,6 +69,7 @@ impl RowByRow {
     }
 
     /// Appends the next row; `row` must be sorted by column.
+    #[inline(always)]
     pub(crate) fn push_row<'a>(&mut self, row: impl Iterator<Item = (u32, &'a Block)>) {
         let start = self.cols.len();
         for (c, b) in row {
@@ -97,6 +99,7 @@ impl BlockMatrix {
         6 * self.n
     }
 
+    #[inline(always)]
     pub fn row(&self, r: usize) -> (&[u32], &[Block]) {
         let range = self.row_ptr[r]..self.row_ptr[r + 1];
         (&self.cols[range.clone()], &self.blocks[range])
@@ -104,23 +107,35 @@ impl BlockMatrix {
 
     /// y = A x.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
-        for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
-            let (cols, blocks) = self.row(r);
-            let mut acc = [0.0; 6];
-            for (&c, b) in cols.iter().zip(blocks) {
-                let c = c as usize;
-                block_mul_add(b, &x[6 * c..6 * c + 6], &mut acc);
-            }
-            y_row.copy_from_slice(&acc);
-        }
+        with_wide_vectors(
+            #[inline(always)]
+            || {
+                for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
+                    let (cols, blocks) = self.row(r);
+                    let mut acc = [0.0; 6];
+                    for (&c, b) in cols.iter().zip(blocks) {
+                        let c = c as usize;
+                        block_mul_add(b, &x[6 * c..6 * c + 6], &mut acc);
+                    }
+                    y_row.copy_from_slice(&acc);
+                }
+            },
+        )
     }
 
-    /// Position of the diagonal block of every row.
     /// r = f − A (x_hi + x_lo), every product and sum carried with its rounding error (FMA
     /// two-product, two-sum; Ogita, Rump & Oishi's compensated dot product). At 1e6:1 stiffness
     /// contrast ‖A‖‖x‖/‖f‖ reaches 1e9, so a plain double residual cannot resolve 1e-9 of ‖f‖:
     /// its cancellation error alone is ~1e-7. Compensated, the error falls to ~eps² ‖A‖‖x‖.
     pub fn residual_compensated(&self, f: &[f64], x_hi: &[f64], x_lo: &[f64], r: &mut [f64]) {
+        with_wide_vectors(
+            #[inline(always)]
+            || self.residual_compensated_rows(f, x_hi, x_lo, r),
+        )
+    }
+
+    #[inline(always)]
+    fn residual_compensated_rows(&self, f: &[f64], x_hi: &[f64], x_lo: &[f64], r: &mut [f64]) {
         for (row, r_row) in r.chunks_exact_mut(6).enumerate() {
             let (cols, blocks) = self.row(row);
             for (k, rk) in r_row.iter_mut().enumerate() {
@@ -141,6 +156,7 @@ impl BlockMatrix {
         }
     }
 
+    /// Position of the diagonal block of every row.
     pub fn diagonal_positions(&self) -> Vec<usize> {
         (0..self.n)
             .map(|r| {

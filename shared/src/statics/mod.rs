@@ -19,6 +19,7 @@ mod single;
 mod solve;
 mod spgemm;
 mod system;
+mod wide;
 
 pub use error::{Result, StaticsError};
 pub use model::StaticModel;
@@ -26,3 +27,4 @@ pub use params::{MultigridParams, Preconditioner, SolverMethod, StaticSolverPara
 pub use solve::{
     SolveDiagnostics, SolveMethodUsed, StaticLoadCase, StaticSolution, StaticSolver, solve,
 };
+pub use wide::baseline_only;

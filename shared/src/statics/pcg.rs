@@ -3,6 +3,7 @@
 use super::bsr::{BlockMatrix, block_mul_add, invert_spd_block};
 use super::error::{Result, StaticsError};
 use super::system::ReducedSystem;
+use super::wide::with_wide_vectors;
 
 /// A symmetric positive definite approximation of A⁻¹.
 pub(crate) trait Precondition {
@@ -55,6 +56,7 @@ impl Precondition for BlockJacobi {
     }
 }
 
+#[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -64,6 +66,21 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// the true residual in floating point; the caller ([`super::solve`]'s refinement loop) measures
 /// the true residual with compensated arithmetic and corrects from it, which also restarts CG.
 pub(crate) fn pcg(
+    system: &ReducedSystem,
+    rhs: &[f64],
+    preconditioner: &mut dyn Precondition,
+    tolerance: f64,
+    max_iterations: usize,
+    x: &mut [f64],
+) -> std::result::Result<usize, usize> {
+    with_wide_vectors(
+        #[inline(always)]
+        || pcg_iterations(system, rhs, preconditioner, tolerance, max_iterations, x),
+    )
+}
+
+#[inline(always)]
+fn pcg_iterations(
     system: &ReducedSystem,
     rhs: &[f64],
     preconditioner: &mut dyn Precondition,

@@ -8,6 +8,7 @@
 
 use super::bsr::{BlockMatrix, block_mul_add};
 use super::element::Block;
+use super::wide::with_wide_vectors;
 
 /// A 6×6 block in single precision.
 pub(crate) type Block32 = [f32; 36];
@@ -57,31 +58,46 @@ impl BlockMatrix32 {
 
     /// y = A x.
     pub fn mul_vec(&self, x: &[f32], y: &mut [f32]) {
-        for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
-            y_row.copy_from_slice(&self.row_product(r, x));
-        }
+        with_wide_vectors(
+            #[inline(always)]
+            || {
+                for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
+                    y_row.copy_from_slice(&self.row_product(r, x));
+                }
+            },
+        )
     }
 
     /// y += A x.
     pub fn mul_vec_add(&self, x: &[f32], y: &mut [f32]) {
-        for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
-            for (y, a) in y_row.iter_mut().zip(self.row_product(r, x)) {
-                *y += a;
-            }
-        }
+        with_wide_vectors(
+            #[inline(always)]
+            || {
+                for (r, y_row) in y.chunks_exact_mut(6).enumerate() {
+                    for (y, a) in y_row.iter_mut().zip(self.row_product(r, x)) {
+                        *y += a;
+                    }
+                }
+            },
+        )
     }
 
     /// res = b − A x.
     pub fn residual(&self, b: &[f32], x: &[f32], res: &mut [f32]) {
-        for (r, res_row) in res.chunks_exact_mut(6).enumerate() {
-            for ((res, a), b) in res_row
-                .iter_mut()
-                .zip(self.row_product(r, x))
-                .zip(&b[6 * r..])
-            {
-                *res = b - a;
-            }
-        }
+        with_wide_vectors(
+            #[inline(always)]
+            || {
+                for (r, res_row) in res.chunks_exact_mut(6).enumerate() {
+                    for ((res, a), b) in res_row
+                        .iter_mut()
+                        .zip(self.row_product(r, x))
+                        .zip(&b[6 * r..])
+                    {
+                        *res = b - a;
+                    }
+                }
+            },
+        )
     }
 
     /// One block Gauss–Seidel pass over the rows, forward or backward, with the inverted
@@ -93,24 +109,45 @@ impl BlockMatrix32 {
         x: &mut [f32],
         backward: bool,
     ) {
-        let mut relax = |i: usize| {
-            let (cols, blocks) = self.row(i);
-            let mut acc = [0.0; 6];
-            for (&c, block) in cols.iter().zip(blocks) {
-                let c = c as usize;
-                if c != i {
-                    block_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
-                }
-            }
-            let r: [f32; 6] = std::array::from_fn(|k| b[6 * i + k] - acc[k]);
-            let mut xi = [0.0; 6];
-            block_mul_add(&inverse_diagonal[i], &r, &mut xi);
-            x[6 * i..6 * i + 6].copy_from_slice(&xi);
-        };
+        with_wide_vectors(
+            #[inline(always)]
+            || self.gauss_seidel_pass(inverse_diagonal, b, x, backward),
+        )
+    }
+
+    #[inline(always)]
+    fn gauss_seidel_pass(
+        &self,
+        inverse_diagonal: &[Block32],
+        b: &[f32],
+        x: &mut [f32],
+        backward: bool,
+    ) {
         if backward {
-            (0..self.n).rev().for_each(&mut relax);
+            for i in (0..self.n).rev() {
+                self.relax(inverse_diagonal, b, x, i);
+            }
         } else {
-            (0..self.n).for_each(&mut relax);
+            for i in 0..self.n {
+                self.relax(inverse_diagonal, b, x, i);
+            }
         }
+    }
+
+    /// Solves row `i` for its six unknowns, the other rows' held.
+    #[inline(always)]
+    fn relax(&self, inverse_diagonal: &[Block32], b: &[f32], x: &mut [f32], i: usize) {
+        let (cols, blocks) = self.row(i);
+        let mut acc = [0.0; 6];
+        for (&c, block) in cols.iter().zip(blocks) {
+            let c = c as usize;
+            if c != i {
+                block_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
+            }
+        }
+        let r: [f32; 6] = std::array::from_fn(|k| b[6 * i + k] - acc[k]);
+        let mut xi = [0.0; 6];
+        block_mul_add(&inverse_diagonal[i], &r, &mut xi);
+        x[6 * i..6 * i + 6].copy_from_slice(&xi);
     }
 }

@@ -1,40 +1,57 @@
 //! Products of block sparse matrices for the Galerkin coarse operators.
 
-use super::bsr::{BlockMatrix, RowByRow, block_gemm_add};
+use super::bsr::{BlockMatrix, block_gemm_add};
+use super::wide::with_wide_vectors;
 
-/// C = A B for block matrices, A with `a.n` rows and B with `ncols` block columns. Each row of C
-/// is accumulated in a scratch row indexed through a dense marker over C's columns, then copied
-/// out in column order, so the result is deterministic and has sorted columns (and each block
-/// is copied once, not pushed and then moved twice by the sort).
+/// C = A B for block matrices, A with `a.n` rows and B with `ncols` block columns. Each row is
+/// made in two passes: its sorted columns first, then its blocks, accumulated in place in C
+/// through a dense marker from column to position. So every block is written once where it
+/// stays, and the sums are taken in the order of A's and B's entries: deterministic.
 pub(crate) fn multiply(a: &BlockMatrix, b: &BlockMatrix, ncols: usize) -> BlockMatrix {
+    with_wide_vectors(
+        #[inline(always)]
+        || multiply_rows(a, b, ncols),
+    )
+}
+
+#[inline(always)]
+fn multiply_rows(a: &BlockMatrix, b: &BlockMatrix, ncols: usize) -> BlockMatrix {
     let mut marker = vec![usize::MAX; ncols];
-    let mut c_rows = RowByRow::with_capacity(a.n, 0);
-    let mut row_cols: Vec<u32> = Vec::new();
-    let mut row_blocks: Vec<[f64; 36]> = Vec::new();
-    let mut order: Vec<(u32, usize)> = Vec::new();
+    let mut row_ptr = Vec::with_capacity(a.n + 1);
+    row_ptr.push(0);
+    let mut cols: Vec<u32> = Vec::new();
+    let mut blocks: Vec<[f64; 36]> = Vec::new();
     for r in 0..a.n {
-        row_cols.clear();
-        row_blocks.clear();
+        let start = cols.len();
         let (a_cols, a_blocks) = a.row(r);
+        for &k in a_cols {
+            for &c in b.row(k as usize).0 {
+                if marker[c as usize] == usize::MAX {
+                    marker[c as usize] = 0;
+                    cols.push(c);
+                }
+            }
+        }
+        cols[start..].sort_unstable();
+        for (position, &c) in cols.iter().enumerate().skip(start) {
+            marker[c as usize] = position;
+        }
+        blocks.resize(cols.len(), [0.0; 36]);
         for (&k, a_block) in a_cols.iter().zip(a_blocks) {
             let (b_cols, b_blocks) = b.row(k as usize);
             for (&c, b_block) in b_cols.iter().zip(b_blocks) {
-                let slot = &mut marker[c as usize];
-                if *slot == usize::MAX {
-                    *slot = row_cols.len();
-                    row_cols.push(c);
-                    row_blocks.push([0.0; 36]);
-                }
-                block_gemm_add(a_block, b_block, &mut row_blocks[*slot]);
+                block_gemm_add(a_block, b_block, &mut blocks[marker[c as usize]]);
             }
         }
-        order.clear();
-        order.extend(row_cols.iter().enumerate().map(|(k, &c)| (c, k)));
-        order.sort_unstable_by_key(|&(c, _)| c);
-        c_rows.push_row(order.iter().map(|&(c, k)| (c, &row_blocks[k])));
-        for &c in &row_cols {
+        for &c in &cols[start..] {
             marker[c as usize] = usize::MAX;
         }
+        row_ptr.push(cols.len());
     }
-    c_rows.finish()
+    BlockMatrix {
+        n: a.n,
+        row_ptr,
+        cols,
+        blocks,
+    }
 }

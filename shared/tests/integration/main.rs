@@ -21,6 +21,7 @@ mod export_vxa;
 mod genome_properties;
 mod locomotion_pictures;
 mod statics_accuracy;
+mod statics_instruction_set;
 mod statics_props;
 mod task_beam_targets;
 mod task_locomotion_heading;
