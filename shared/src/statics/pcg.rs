@@ -75,54 +75,44 @@ pub(crate) fn pcg(
 ) -> std::result::Result<usize, usize> {
     with_wide_vectors(
         #[inline(always)]
-        || pcg_iterations(system, rhs, preconditioner, tolerance, max_iterations, x),
+        || {
+            let a = &system.matrix;
+            let n = rhs.len();
+            x.fill(0.0);
+            let rhs_norm = system.si_force_norm(rhs);
+            if rhs_norm == 0.0 {
+                return Ok(0);
+            }
+            let mut r = rhs.to_vec();
+            let mut z = vec![0.0; n];
+            let mut q = vec![0.0; n];
+            preconditioner.apply(&r, &mut z);
+            let mut p = z.clone();
+            let mut rz = dot(&r, &z);
+            for iteration in 1..=max_iterations {
+                a.mul_vec(&p, &mut q);
+                let pq = dot(&p, &q);
+                if !(pq > 0.0 && pq.is_finite()) {
+                    // A breakdown: pᵀAp ≤ 0 means the preconditioner or the matrix is not SPD.
+                    return Err(iteration);
+                }
+                let alpha = rz / pq;
+                for ((xi, ri), (pi, qi)) in x.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(&q)) {
+                    *xi += alpha * pi;
+                    *ri -= alpha * qi;
+                }
+                if system.si_force_norm(&r) <= tolerance * rhs_norm {
+                    return Ok(iteration);
+                }
+                preconditioner.apply(&r, &mut z);
+                let rz_next = dot(&r, &z);
+                let beta = rz_next / rz;
+                rz = rz_next;
+                for (pi, zi) in p.iter_mut().zip(&z) {
+                    *pi = zi + beta * *pi;
+                }
+            }
+            Err(max_iterations)
+        },
     )
-}
-
-#[inline(always)]
-fn pcg_iterations(
-    system: &ReducedSystem,
-    rhs: &[f64],
-    preconditioner: &mut dyn Precondition,
-    tolerance: f64,
-    max_iterations: usize,
-    x: &mut [f64],
-) -> std::result::Result<usize, usize> {
-    let a = &system.matrix;
-    let n = rhs.len();
-    x.fill(0.0);
-    let rhs_norm = system.si_force_norm(rhs);
-    if rhs_norm == 0.0 {
-        return Ok(0);
-    }
-    let mut r = rhs.to_vec();
-    let mut z = vec![0.0; n];
-    let mut q = vec![0.0; n];
-    preconditioner.apply(&r, &mut z);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    for iteration in 1..=max_iterations {
-        a.mul_vec(&p, &mut q);
-        let pq = dot(&p, &q);
-        if !(pq > 0.0 && pq.is_finite()) {
-            // A breakdown: pᵀAp ≤ 0 means the preconditioner or the matrix is not SPD.
-            return Err(iteration);
-        }
-        let alpha = rz / pq;
-        for ((xi, ri), (pi, qi)) in x.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(&q)) {
-            *xi += alpha * pi;
-            *ri -= alpha * qi;
-        }
-        if system.si_force_norm(&r) <= tolerance * rhs_norm {
-            return Ok(iteration);
-        }
-        preconditioner.apply(&r, &mut z);
-        let rz_next = dot(&r, &z);
-        let beta = rz_next / rz;
-        rz = rz_next;
-        for (pi, zi) in p.iter_mut().zip(&z) {
-            *pi = zi + beta * *pi;
-        }
-    }
-    Err(max_iterations)
 }
