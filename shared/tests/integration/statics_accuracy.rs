@@ -9,29 +9,12 @@ use amorph::statics::{
 use amorph::voxel::{GridDims, VoxelGrid};
 use nalgebra::{DMatrix, DVector};
 
+use crate::common::{cantilever_case, cantilever_case_with, contrast_palette, two_material_design};
+
 const VOXEL: f64 = 1.0e-3;
 
 fn single_material(e: f64, nu: f64) -> Palette {
     Palette(vec![Material::new("m", e, nu)])
-}
-
-/// Clamps the y = 0 layer and spreads a total force `tip_force` (N, along −z) over the last layer.
-fn cantilever_case(model: &StaticModel) -> StaticLoadCase {
-    cantilever_case_with(model, 1.0e-2)
-}
-
-fn cantilever_case_with(model: &StaticModel, tip_force: f64) -> StaticLoadCase {
-    let ny = model.dims().ny;
-    let nodes = |y: usize| (0..model.node_count()).filter(move |&n| model.node_coords(n)[1] == y);
-    let tip: Vec<usize> = nodes(ny - 1).collect();
-    let per_node = -tip_force / tip.len() as f64;
-    StaticLoadCase {
-        fixed_nodes: nodes(0).collect(),
-        loads: tip
-            .iter()
-            .map(|&n| (n, [0.0, 0.0, per_node, 0.0, 0.0, 0.0]))
-            .collect(),
-    }
 }
 
 /// Mean downward deflection of the tip layer.
@@ -138,27 +121,6 @@ fn dense_reference(model: &StaticModel, case: &StaticLoadCase) -> Vec<[f64; 6]> 
         out[node] = std::array::from_fn(|c| u[6 * kk + c]);
     }
     out
-}
-
-fn two_material_design(dims: GridDims, soft_every: usize, hole: bool) -> VoxelGrid {
-    let mut grid = VoxelGrid::filled(dims, MaterialId(0));
-    for i in 0..dims.cell_count() {
-        let [x, y, z] = dims.coords(i);
-        if (x + 2 * y + 3 * z) % soft_every == 0 {
-            grid.set(x, y, z, Some(MaterialId(1)));
-        }
-    }
-    if hole {
-        grid.set(1, dims.ny / 2, 1, None);
-    }
-    grid
-}
-
-fn contrast_palette(ratio: f64) -> Palette {
-    Palette(vec![
-        Material::new("hard", 1.0e9, 0.35),
-        Material::new("soft", 1.0e9 / ratio, 0.45),
-    ])
 }
 
 /// Relative max-norm difference of displacement fields, translations and rotations separately

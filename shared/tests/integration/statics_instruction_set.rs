@@ -3,41 +3,12 @@
 //! latter), and both must compute every value by the same operations in the same order. On a
 //! CPU without AVX2 both runs take the baseline loops and this test compares a path with itself.
 
-use amorph::material::{Material, MaterialId, Palette};
 use amorph::statics::{
-    SolveMethodUsed, StaticLoadCase, StaticModel, StaticSolution, StaticSolverParams,
-    baseline_only, solve,
+    SolveMethodUsed, StaticModel, StaticSolution, StaticSolverParams, baseline_only, solve,
 };
-use amorph::voxel::{GridDims, VoxelGrid};
+use amorph::voxel::GridDims;
 
-/// Hard resin with soft voxels scattered through it at the contrast `ratio` (the beams' 1000:1,
-/// and 10⁶:1, where the compensated refinement takes more than one step).
-fn two_material(dims: GridDims, ratio: f64) -> (VoxelGrid, Palette) {
-    let mut grid = VoxelGrid::filled(dims, MaterialId(0));
-    for i in 0..dims.cell_count() {
-        let [x, y, z] = dims.coords(i);
-        if (x + 2 * y + 3 * z) % 3 == 0 {
-            grid.set(x, y, z, Some(MaterialId(1)));
-        }
-    }
-    let palette = Palette(vec![
-        Material::new("hard", 1.0e9, 0.35),
-        Material::new("soft", 1.0e9 / ratio, 0.45),
-    ]);
-    (grid, palette)
-}
-
-/// The y = 0 layer clamped, the last layer pushed down and twisted.
-fn cantilever(model: &StaticModel) -> StaticLoadCase {
-    let ny = model.dims().ny;
-    let layer = |y: usize| (0..model.node_count()).filter(move |&n| model.node_coords(n)[1] == y);
-    StaticLoadCase {
-        fixed_nodes: layer(0).collect(),
-        loads: layer(ny - 1)
-            .map(|n| (n, [0.0, 0.0, -1.0e-3, 1.0e-7, 0.0, 0.0]))
-            .collect(),
-    }
-}
+use crate::common::{cantilever_case, contrast_palette, two_material_design};
 
 fn bits(solution: &StaticSolution) -> Vec<u64> {
     let diagnostics = &solution.diagnostics;
@@ -70,9 +41,11 @@ fn solver_bits_do_not_depend_on_the_instruction_set() {
         (GridDims::new(4, 20, 4), 1.0e6, StaticSolverParams::direct()),
     ];
     for (dims, ratio, params) in cases {
-        let (grid, palette) = two_material(dims, ratio);
-        let model = StaticModel::new(&grid, &palette, 1.0e-3).unwrap();
-        let case = cantilever(&model);
+        // soft voxels scattered through hard resin, the tip pushed down and twisted
+        let grid = two_material_design(dims, 3, false);
+        let model = StaticModel::new(&grid, &contrast_palette(ratio), 1.0e-3).unwrap();
+        let mut case = cantilever_case(&model);
+        case.loads.iter_mut().for_each(|(_, load)| load[3] = 1.0e-7);
         let wide = solve(&model, &case, &params).unwrap();
         let baseline = baseline_only(|| solve(&model, &case, &params)).unwrap();
         let label = format!("{dims:?} at {ratio:e}:1, {:?}", wide.diagnostics);

@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests (each test file includes this module).
 
 use amorph::genome::{GaussianPoint, Genome};
-use amorph::material::MaterialId;
+use amorph::material::{Material, MaterialId, Palette};
+use amorph::statics::{StaticLoadCase, StaticModel};
 use amorph::task::locomotion::LocomotionScene;
 use amorph::voxel::{GridDims, VoxelGrid};
 
@@ -39,4 +40,47 @@ pub fn short_walker() -> (Genome, LocomotionScene, GridDims) {
         a.period = 0.02;
     }
     (genome, scene, GridDims::new(6, 6, 6))
+}
+
+/// Clamps the y = 0 layer and spreads a total force `tip_force` (N, along −z) over the last layer.
+pub fn cantilever_case(model: &StaticModel) -> StaticLoadCase {
+    cantilever_case_with(model, 1.0e-2)
+}
+
+pub fn cantilever_case_with(model: &StaticModel, tip_force: f64) -> StaticLoadCase {
+    let ny = model.dims().ny;
+    let nodes = |y: usize| (0..model.node_count()).filter(move |&n| model.node_coords(n)[1] == y);
+    let tip: Vec<usize> = nodes(ny - 1).collect();
+    let per_node = -tip_force / tip.len() as f64;
+    StaticLoadCase {
+        fixed_nodes: nodes(0).collect(),
+        loads: tip
+            .iter()
+            .map(|&n| (n, [0.0, 0.0, per_node, 0.0, 0.0, 0.0]))
+            .collect(),
+    }
+}
+
+/// Hard resin with soft voxels where (x + 2y + 3z) is a multiple of `soft_every`, and optionally
+/// one voxel removed from the middle.
+pub fn two_material_design(dims: GridDims, soft_every: usize, hole: bool) -> VoxelGrid {
+    let mut grid = VoxelGrid::filled(dims, MaterialId(0));
+    for i in 0..dims.cell_count() {
+        let [x, y, z] = dims.coords(i);
+        if (x + 2 * y + 3 * z) % soft_every == 0 {
+            grid.set(x, y, z, Some(MaterialId(1)));
+        }
+    }
+    if hole {
+        grid.set(1, dims.ny / 2, 1, None);
+    }
+    grid
+}
+
+/// Hard resin (1 GPa) and a soft one `ratio` times softer.
+pub fn contrast_palette(ratio: f64) -> Palette {
+    Palette(vec![
+        Material::new("hard", 1.0e9, 0.35),
+        Material::new("soft", 1.0e9 / ratio, 0.45),
+    ])
 }
