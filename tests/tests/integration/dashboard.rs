@@ -5,7 +5,7 @@
 use std::collections::{BTreeSet, HashMap};
 use std::net::{SocketAddr, TcpStream};
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use amorph_coordinator::job::{JobOptions, StoreMode, run_job};
 use amorph_coordinator::store::RunStore;
@@ -64,8 +64,21 @@ fn the_status_of_a_run_agrees_with_its_files_live_and_from_the_store() {
         .recv_timeout(Duration::from_secs(60))
         .expect("the dashboard is served");
 
-    // Live, before any worker came: the first batch waits in the queue.
-    let waiting = status(addr);
+    // Live, before any worker came: the first batch waits in the queue. The dashboard is served
+    // before the search has queued its first batch, so wait for the queue to fill.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let waiting = loop {
+        let s = status(addr);
+        if s["queue"]["queued"].as_u64().unwrap() > 0 {
+            break s;
+        }
+        assert_eq!(s["progress"]["evaluations"], 0, "{s:#}");
+        assert!(
+            Instant::now() < deadline,
+            "the first batch was never queued: {s:#}"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
     assert_eq!(waiting["live"], true);
     assert_eq!(waiting["run"]["task"], "beam");
     assert_eq!(waiting["run"]["budget_evaluations"], 160);
@@ -73,7 +86,6 @@ fn the_status_of_a_run_agrees_with_its_files_live_and_from_the_store() {
     assert!(waiting["history"].as_array().unwrap().is_empty());
     assert!(waiting["best"].is_null());
     assert!(waiting["workers"].as_array().unwrap().is_empty());
-    assert!(waiting["queue"]["queued"].as_u64().unwrap() > 0);
     // A worker joins: the queue's view lists it with its threads before it has finished an
     // evaluation, and the store's rows count what it finished.
     let worker = TestWorker::start(&format!("http://{grpc}"), 1, None);
