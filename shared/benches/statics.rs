@@ -42,20 +42,6 @@ fn two_material(dims: GridDims, seed: u64) -> VoxelGrid {
     grid
 }
 
-fn cantilever(model: &StaticModel) -> StaticLoadCase {
-    let ny = model.dims().ny;
-    let layer = |y: usize| (0..model.node_count()).filter(move |&n| model.node_coords(n)[1] == y);
-    let tip: Vec<usize> = layer(ny - 1).collect();
-    let f = -0.01 / tip.len() as f64;
-    StaticLoadCase {
-        fixed_nodes: layer(0).collect(),
-        loads: tip
-            .iter()
-            .map(|&n| (n, [0.0, 0.0, f, 0.0, 0.0, 0.0]))
-            .collect(),
-    }
-}
-
 fn bench_case(
     c: &mut Criterion,
     name: &str,
@@ -65,7 +51,7 @@ fn bench_case(
     let dims = grid.dims();
     let palette = Palette::hard_soft_resins();
     let model = StaticModel::new(grid, &palette, BEAM_LENGTH / dims.ny as f64).unwrap();
-    let case = cantilever(&model);
+    let case = StaticLoadCase::cantilever(&model, 0.01);
     for (method, params) in methods {
         let run = || {
             let solve = || solve(black_box(&model), black_box(&case), params).unwrap();

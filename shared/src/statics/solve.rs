@@ -21,6 +21,29 @@ pub struct StaticLoadCase {
     pub loads: Vec<(usize, [f64; 6])>,
 }
 
+impl StaticLoadCase {
+    /// The cantilever the static tasks load: the nodes of the `y = 0` layer clamped, a total force
+    /// `tip_load` (N, along −z) spread evenly over the nodes of the last layer, each layer's nodes
+    /// in (z, x) order.
+    pub fn cantilever(model: &StaticModel, tip_load: f64) -> Self {
+        let dims = model.dims();
+        let layer = |y: usize| {
+            (0..dims.nz)
+                .flat_map(move |z| (0..dims.nx).map(move |x| dims.index(x, y, z)))
+                .filter_map(|cell| model.node_of_cell(cell))
+        };
+        let tip: Vec<usize> = layer(dims.ny - 1).collect();
+        let force = -tip_load / tip.len() as f64;
+        Self {
+            fixed_nodes: layer(0).collect(),
+            loads: tip
+                .iter()
+                .map(|&n| (n, [0.0, 0.0, force, 0.0, 0.0, 0.0]))
+                .collect(),
+        }
+    }
+}
+
 /// The solver that produced a solution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

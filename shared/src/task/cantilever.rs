@@ -77,21 +77,12 @@ pub fn solve_cantilever(
     if grid.filled_count() == 0 {
         return Err(Failure::Empty);
     }
-    let tip_cells: Vec<usize> = layer_cells(grid, dims.ny - 1).collect();
-    if tip_cells.is_empty() {
+    if layer_cells(grid, dims.ny - 1).next().is_none() {
         return Err(Failure::NotSpanning);
     }
     let model =
         StaticModel::new(grid, palette, voxel_size).map_err(|e| Failure::Solver(e.to_string()))?;
-    let node = |cell: usize| model.node_of_cell(cell).expect("filled cell has a node");
-    let force = -tip_load / tip_cells.len() as f64;
-    let case = StaticLoadCase {
-        fixed_nodes: layer_cells(grid, 0).map(node).collect(),
-        loads: tip_cells
-            .iter()
-            .map(|&c| (node(c), [0.0, 0.0, force, 0.0, 0.0, 0.0]))
-            .collect(),
-    };
+    let case = StaticLoadCase::cantilever(&model, tip_load);
     let solution =
         statics::solve(&model, &case, solver).map_err(|e| Failure::Solver(e.to_string()))?;
     Ok(SolvedCantilever { model, solution })

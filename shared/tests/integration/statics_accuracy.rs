@@ -9,7 +9,7 @@ use amorph::statics::{
 use amorph::voxel::{GridDims, VoxelGrid};
 use nalgebra::{DMatrix, DVector};
 
-use crate::common::{cantilever_case, cantilever_case_with, contrast_palette, two_material_design};
+use crate::common::{cantilever_case, contrast_palette, two_material_design};
 
 const VOXEL: f64 = 1.0e-3;
 
@@ -38,7 +38,7 @@ fn slender_beam_matches_euler_bernoulli() {
     let grid = VoxelGrid::filled(dims, MaterialId(0));
     let model = StaticModel::new(&grid, &single_material(e, 0.35), VOXEL).unwrap();
     let force = 1.0e-2;
-    let case = cantilever_case_with(&model, force);
+    let case = StaticLoadCase::cantilever(&model, force);
     let solution = solve(&model, &case, &StaticSolverParams::direct()).unwrap();
     let length = 39.0 * VOXEL;
     let inertia = (2.0 * VOXEL).powi(4) / 12.0;
@@ -68,7 +68,7 @@ fn stocky_beam_lies_between_euler_bernoulli_and_timoshenko() {
     let grid = VoxelGrid::filled(dims, MaterialId(0));
     let model = StaticModel::new(&grid, &single_material(e, nu), VOXEL).unwrap();
     let force = 1.0e-2;
-    let case = cantilever_case_with(&model, force);
+    let case = StaticLoadCase::cantilever(&model, force);
     let solution = solve(&model, &case, &StaticSolverParams::default()).unwrap();
     let length = 39.0 * VOXEL;
     let side = 12.0 * VOXEL;
@@ -206,13 +206,13 @@ fn response_is_linear_in_the_load() {
     let model = StaticModel::new(&grid, &contrast_palette(1000.0), VOXEL).unwrap();
     let one = solve(
         &model,
-        &cantilever_case_with(&model, 1.0),
+        &StaticLoadCase::cantilever(&model, 1.0),
         &StaticSolverParams::direct(),
     )
     .unwrap();
     let two = solve(
         &model,
-        &cantilever_case_with(&model, 2.0),
+        &StaticLoadCase::cantilever(&model, 2.0),
         &StaticSolverParams::direct(),
     )
     .unwrap();

@@ -42,23 +42,9 @@ pub fn short_walker() -> (Genome, LocomotionScene, GridDims) {
     (genome, scene, GridDims::new(6, 6, 6))
 }
 
-/// Clamps the y = 0 layer and spreads a total force `tip_force` (N, along −z) over the last layer.
+/// The library's cantilever with a total tip force of 0.01 N.
 pub fn cantilever_case(model: &StaticModel) -> StaticLoadCase {
-    cantilever_case_with(model, 1.0e-2)
-}
-
-pub fn cantilever_case_with(model: &StaticModel, tip_force: f64) -> StaticLoadCase {
-    let ny = model.dims().ny;
-    let nodes = |y: usize| (0..model.node_count()).filter(move |&n| model.node_coords(n)[1] == y);
-    let tip: Vec<usize> = nodes(ny - 1).collect();
-    let per_node = -tip_force / tip.len() as f64;
-    StaticLoadCase {
-        fixed_nodes: nodes(0).collect(),
-        loads: tip
-            .iter()
-            .map(|&n| (n, [0.0, 0.0, per_node, 0.0, 0.0, 0.0]))
-            .collect(),
-    }
+    StaticLoadCase::cantilever(model, 1.0e-2)
 }
 
 /// Hard resin with soft voxels where (x + 2y + 3z) is a multiple of `soft_every`, and optionally
