@@ -10,14 +10,14 @@
 //! hierarchy is built in double precision; the V-cycle runs on single-precision copies of its
 //! matrices and vectors (`single.rs`: it is memory-bound, and a preconditioner need not be exact).
 
-use super::bsr::{BlockMatrix, RowByRow, block_gemm_add, block_mul_add};
+use super::bsr::{BlockMatrix, RowByRow, block_gemm_add};
 use super::direct::DirectFactor;
 use super::element::Block;
 use super::error::Result;
 use super::params::MultigridParams;
 use super::pcg::{Precondition, inverse_diagonal_blocks};
-use super::single::{Block32, BlockMatrix32, block32};
-use super::spgemm::multiply;
+use super::single::{Block32, BlockMatrix32, block32, block32_mul_add};
+use super::spgemm::galerkin_product;
 use super::wide::with_wide_vectors;
 
 /// One level of the V-cycle, in single precision.
@@ -152,7 +152,7 @@ fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: 
         a.mul_vec(&v, &mut w);
         for (inv, wr) in inverse_diagonal.iter().zip(w.chunks_exact_mut(6)) {
             let mut acc = [0.0; 6];
-            block_mul_add(inv, wr, &mut acc);
+            block32_mul_add(inv, wr, &mut acc);
             wr.copy_from_slice(&acc);
         }
         lambda = w
@@ -251,15 +251,13 @@ impl Multigrid {
             let omega = params.prolongator_damping / lambda;
             let (q, coarse_modes) = orthonormalise(&modes, &aggregate_of, nc);
             let p = smoothed_prolongator(a, &inverse_diagonal, &q, &aggregate_of, omega);
-            let r = p.transpose(nc);
-            let ap = multiply(a, &p, nc);
-            let coarse = multiply(&r, &ap, nc);
+            let coarse = galerkin_product(a, &p, nc);
             let dof = a.dof();
             levels.push(Level {
                 a: a32,
                 inverse_diagonal: inverse_diagonal32,
                 p: BlockMatrix32::from_f64(&p),
-                r: BlockMatrix32::from_f64(&r),
+                r: BlockMatrix32::transpose_from_f64(&p, nc),
                 b: vec![0.0; dof],
                 x: vec![0.0; dof],
                 res: vec![0.0; dof],

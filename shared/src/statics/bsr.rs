@@ -14,7 +14,8 @@ pub(crate) struct BlockMatrix {
     pub blocks: Vec<Block>,
 }
 
-/// y += B x for one block, in double or (for the V-cycle, `single.rs`) single precision.
+/// y += B x for one row-major block (generic so that a test can set the column-stored single-
+/// precision kernel of `single.rs` beside it).
 #[inline(always)]
 pub(crate) fn block_mul_add<T>(b: &[T; 36], x: &[T], y: &mut [T; 6])
 where
@@ -167,35 +168,6 @@ impl BlockMatrix {
                 self.row_ptr[r] + k
             })
             .collect()
-    }
-
-    /// The transpose, for a rectangular matrix with `ncols` block columns.
-    pub fn transpose(&self, ncols: usize) -> BlockMatrix {
-        let mut counts = vec![0usize; ncols + 1];
-        for &c in &self.cols {
-            counts[c as usize + 1] += 1;
-        }
-        for k in 0..ncols {
-            counts[k + 1] += counts[k];
-        }
-        let mut next = counts.clone();
-        let mut cols = vec![0u32; self.cols.len()];
-        let mut blocks = vec![[0.0; 36]; self.cols.len()];
-        for r in 0..self.n {
-            let (rc, rb) = self.row(r);
-            for (&c, b) in rc.iter().zip(rb) {
-                let slot = &mut next[c as usize];
-                cols[*slot] = r as u32;
-                blocks[*slot] = super::element::transpose(b);
-                *slot += 1;
-            }
-        }
-        BlockMatrix {
-            n: ncols,
-            row_ptr: counts,
-            cols,
-            blocks,
-        }
     }
 }
 

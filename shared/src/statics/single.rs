@@ -6,11 +6,13 @@
 //! the fine matrix three times and the coarse ones as often, ~115 MB per iteration at 12×12×40 —
 //! so storing its matrices and vectors in `f32` halves what it reads.
 
-use super::bsr::{BlockMatrix, block_mul_add};
+use super::bsr::BlockMatrix;
 use super::element::Block;
 use super::wide::with_wide_vectors;
 
-/// A 6×6 block in single precision.
+/// A 6×6 block in single precision, stored by columns: [`block32_mul_add`] then works on whole
+/// columns, six rows at once in vector registers, where a row-major block needs a sequential sum
+/// across each row.
 pub(crate) type Block32 = [f32; 36];
 
 /// A block sparse row matrix in single precision (see [`BlockMatrix`]).
@@ -22,9 +24,27 @@ pub(crate) struct BlockMatrix32 {
     blocks: Vec<Block32>,
 }
 
-/// The block rounded to single precision.
+/// The row-major double block rounded to single precision, stored by columns.
 pub(crate) fn block32(b: &Block) -> Block32 {
-    b.map(|x| x as f32)
+    std::array::from_fn(|i| b[6 * (i % 6) + i / 6] as f32)
+}
+
+/// y += B x for a column-stored block. Each row's products are summed in column order and the
+/// sum then added to y, exactly as [`super::bsr::block_mul_add`] sums a row-major block, so the
+/// two give the same bits; only the layout differs.
+#[inline(always)]
+pub(crate) fn block32_mul_add(b: &Block32, x: &[f32], y: &mut [f32; 6]) {
+    let x: &[f32; 6] = x.try_into().expect("six unknowns per node");
+    let column = |k: usize| -> &[f32; 6] { b[6 * k..6 * k + 6].try_into().expect("block column") };
+    let mut sum: [f32; 6] = std::array::from_fn(|r| column(0)[r] * x[0]);
+    for (k, &xk) in x.iter().enumerate().skip(1) {
+        for (s, &bk) in sum.iter_mut().zip(column(k)) {
+            *s = *s + bk * xk;
+        }
+    }
+    for (yr, s) in y.iter_mut().zip(sum) {
+        *yr = *yr + s;
+    }
 }
 
 impl BlockMatrix32 {
@@ -35,6 +55,37 @@ impl BlockMatrix32 {
             row_ptr: a.row_ptr.iter().map(|&p| p as u32).collect(),
             cols: a.cols.clone(),
             blocks: a.blocks.iter().map(block32).collect(),
+        }
+    }
+
+    /// The transpose of `a` (with `ncols` block columns) rounded to single precision: the
+    /// restriction Pᵀ made straight from the prolongator. A column-stored block of Pᵀ holds the
+    /// row-major values of the block of P it mirrors, so each block is only rounded.
+    pub fn transpose_from_f64(a: &BlockMatrix, ncols: usize) -> Self {
+        let mut row_ptr = vec![0u32; ncols + 1];
+        for &c in &a.cols {
+            row_ptr[c as usize + 1] += 1;
+        }
+        for k in 0..ncols {
+            row_ptr[k + 1] += row_ptr[k];
+        }
+        let mut next = row_ptr.clone();
+        let mut cols = vec![0u32; a.cols.len()];
+        let mut blocks = vec![[0.0; 36]; a.cols.len()];
+        for r in 0..a.n {
+            let (a_cols, a_blocks) = a.row(r);
+            for (&c, b) in a_cols.iter().zip(a_blocks) {
+                let slot = &mut next[c as usize];
+                cols[*slot as usize] = r as u32;
+                blocks[*slot as usize] = b.map(|x| x as f32);
+                *slot += 1;
+            }
+        }
+        Self {
+            n: ncols,
+            row_ptr,
+            cols,
+            blocks,
         }
     }
 
@@ -51,7 +102,7 @@ impl BlockMatrix32 {
         let mut acc = [0.0; 6];
         for (&c, b) in cols.iter().zip(blocks) {
             let c = 6 * c as usize;
-            block_mul_add(b, &x[c..c + 6], &mut acc);
+            block32_mul_add(b, &x[c..c + 6], &mut acc);
         }
         acc
     }
@@ -142,12 +193,71 @@ impl BlockMatrix32 {
         for (&c, block) in cols.iter().zip(blocks) {
             let c = c as usize;
             if c != i {
-                block_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
+                block32_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
             }
         }
         let r: [f32; 6] = std::array::from_fn(|k| b[6 * i + k] - acc[k]);
         let mut xi = [0.0; 6];
-        block_mul_add(&inverse_diagonal[i], &r, &mut xi);
+        block32_mul_add(&inverse_diagonal[i], &r, &mut xi);
         x[6 * i..6 * i + 6].copy_from_slice(&xi);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::statics::bsr::block_mul_add;
+    use crate::statics::element::transpose;
+
+    #[test]
+    fn a_column_stored_block_gives_the_row_major_products_bits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..1000 {
+            let b: Block = std::array::from_fn(|_| rng.random_range(-1.0e3..1.0e3));
+            let x: [f32; 6] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+            let y0: [f32; 6] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+            let row_major = b.map(|v| v as f32);
+            let (mut by_rows, mut by_columns) = (y0, y0);
+            block_mul_add(&row_major, &x, &mut by_rows);
+            block32_mul_add(&block32(&b), &x, &mut by_columns);
+            assert_eq!(by_rows.map(f32::to_bits), by_columns.map(f32::to_bits));
+        }
+    }
+
+    #[test]
+    fn the_restriction_is_the_rounded_transpose_of_the_prolongator() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let (rows, ncols) = (50, 7);
+        let mut p = BlockMatrix {
+            n: rows,
+            row_ptr: vec![0],
+            ..Default::default()
+        };
+        let mut transposed: Vec<Vec<(u32, Block)>> = vec![Vec::new(); ncols];
+        for r in 0..rows {
+            let mut cols: Vec<u32> = (0..3).map(|_| rng.random_range(0..ncols as u32)).collect();
+            cols.sort_unstable();
+            cols.dedup();
+            for c in cols {
+                let b: Block = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+                transposed[c as usize].push((r as u32, transpose(&b)));
+                p.cols.push(c);
+                p.blocks.push(b);
+            }
+            p.row_ptr.push(p.cols.len());
+        }
+        let r = BlockMatrix32::transpose_from_f64(&p, ncols);
+        assert_eq!(r.n, ncols);
+        for (big_i, row) in transposed.iter().enumerate() {
+            let (cols, blocks) = r.row(big_i);
+            let expected_cols: Vec<u32> = row.iter().map(|(c, _)| *c).collect();
+            assert_eq!(cols, expected_cols.as_slice());
+            for (b, (_, t)) in blocks.iter().zip(row) {
+                assert_eq!(b.map(f32::to_bits), block32(t).map(f32::to_bits));
+            }
+        }
     }
 }
