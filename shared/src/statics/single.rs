@@ -39,11 +39,11 @@ pub(crate) fn block32_mul_add(b: &Block32, x: &[f32], y: &mut [f32; 6]) {
     let mut sum: [f32; 6] = std::array::from_fn(|r| column(0)[r] * x[0]);
     for (k, &xk) in x.iter().enumerate().skip(1) {
         for (s, &bk) in sum.iter_mut().zip(column(k)) {
-            *s = *s + bk * xk;
+            *s += bk * xk;
         }
     }
     for (yr, s) in y.iter_mut().zip(sum) {
-        *yr = *yr + s;
+        *yr += s;
     }
 }
 
