@@ -217,15 +217,15 @@ mod tests {
         let half = random_matrix(&mut rng, 60, 60, 4);
         // A = H + Hᵀ, stored in full
         let mut dense = vec![vec![None::<Block>; 60]; 60];
-        for i in 0..60 {
-            for (&j, b) in half.row(i).0.iter().zip(half.row(i).1) {
-                let j = j as usize;
-                let t = transpose(b);
-                let ij = dense[i][j].get_or_insert([0.0; 36]);
-                ij.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-                let ji = dense[j][i].get_or_insert([0.0; 36]);
-                ji.iter_mut().zip(&t).for_each(|(x, y)| *x += y);
-            }
+        let mirrored = (0..60).flat_map(|i| {
+            let (cols, blocks) = half.row(i);
+            cols.iter()
+                .zip(blocks)
+                .flat_map(move |(&j, b)| [(i, j as usize, *b), (j as usize, i, transpose(b))])
+        });
+        for (i, j, b) in mirrored {
+            let sum = dense[i][j].get_or_insert([0.0; 36]);
+            sum.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
         }
         let mut a = BlockMatrix {
             n: 60,
