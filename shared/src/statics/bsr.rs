@@ -77,7 +77,7 @@ impl RowByRow {
             self.cols.push(c);
             self.blocks.push(*b);
         }
-        debug_assert!(
+        assert!(
             self.cols[start..].windows(2).all(|w| w[0] < w[1]),
             "columns ascend"
         );

@@ -83,7 +83,7 @@ impl<'g> LayerSampler<'g> {
     /// result does not depend on how the caller walks the layers.
     pub fn accumulate_layer(&self, z: f64, out: &mut [f64], stride: usize) {
         let (nx, ny) = (self.columns, self.rows);
-        debug_assert!(
+        assert!(
             stride >= nx * ny
                 && out.len() >= self.material_count.saturating_sub(1) * stride + nx * ny
         );
