@@ -98,9 +98,17 @@ fn sybil(name: &str, confirmers: usize, verify_all: bool) {
             assert_eq!(r.dispositions, [v1::ReportDisposition::Accepted as i32]);
         }
         // B does the rest of the first batch honestly, so the batch completes and its claims
-        // are checked; meanwhile it asks for everything, checks included.
+        // are checked; meanwhile it asks for everything, checks included. It stops once the
+        // store records the quarantine: working on, it could finish the run, and the coordinator
+        // would be gone before A is refused.
         let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(4) {
+        while !amorph_coordinator::store::RunStore::peek_verification(&run.store)
+            .is_ok_and(|(_, _, quarantined)| quarantined > 0)
+        {
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "no quarantine within 60 s"
+            );
             for b in &mut confirmers_ {
                 for task in b.try_lease(1024, 100).await.unwrap() {
                     assert!(
