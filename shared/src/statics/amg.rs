@@ -1,7 +1,7 @@
 //! Smoothed-aggregation algebraic multigrid, used as the preconditioner of CG.
 //!
 //! Aggregates are the 2×2×2 blocks of the voxel grid (geometric aggregation, recursively on the
-//! coarse grids), with small stiff clusters of the fine grid kept whole (`aggregate.rs`). The tentative prolongator maps each aggregate's six rigid-body modes
+//! coarse grids). The tentative prolongator maps each aggregate's six rigid-body modes
 //! (translations and infinitesimal rotations, orthonormalised per aggregate) to one coarse node
 //! with six unknowns; Jacobi smoothing `P = (I − ω D⁻¹A) P_tent` lowers the energy of the coarse
 //! basis; coarse operators are Galerkin products `Pᵀ A P`. The V-cycle does forward block
@@ -10,7 +10,6 @@
 //! hierarchy is built in double precision; the V-cycle runs on single-precision copies of its
 //! matrices and vectors (`single.rs`: it is memory-bound, and a preconditioner need not be exact).
 
-use super::aggregate::{fine_aggregates, grid_aggregates};
 use super::bsr::{BlockMatrix, RowByRow, block_gemm_add};
 use super::direct::DirectFactor;
 use super::element::Block;
@@ -62,6 +61,29 @@ fn rigid_modes(x: [f64; 3]) -> Block {
     b[5] = -x[1];
     b[6 + 5] = x[0];
     b
+}
+
+/// The aggregates of one level: aggregate of each node, coarse coordinates.
+fn aggregate(coords: &[[u32; 3]]) -> (Vec<u32>, Vec<[u32; 3]>) {
+    let mut extent = [0usize; 3];
+    for c in coords {
+        for (e, &ck) in extent.iter_mut().zip(c) {
+            *e = (*e).max(ck as usize / 2 + 1);
+        }
+    }
+    let mut id_of_key = vec![u32::MAX; extent[0] * extent[1] * extent[2]];
+    let mut aggregate_of = Vec::with_capacity(coords.len());
+    let mut coarse_coords = Vec::new();
+    for c in coords {
+        let key = [c[0] / 2, c[1] / 2, c[2] / 2];
+        let flat = key[0] as usize + extent[0] * (key[1] as usize + extent[1] * key[2] as usize);
+        if id_of_key[flat] == u32::MAX {
+            id_of_key[flat] = coarse_coords.len() as u32;
+            coarse_coords.push(key);
+        }
+        aggregate_of.push(id_of_key[flat]);
+    }
+    (aggregate_of, coarse_coords)
 }
 
 /// Orthonormalises the near-null-space blocks of each aggregate (modified Gram–Schmidt, twice
@@ -217,11 +239,7 @@ impl Multigrid {
             if a.n <= params.coarse_max_nodes || levels.len() + 1 >= params.max_levels {
                 break;
             }
-            let (aggregate_of, coarse_coords) = if levels.is_empty() {
-                fine_aggregates(a, &coords)
-            } else {
-                grid_aggregates(&coords)
-            };
+            let (aggregate_of, coarse_coords) = aggregate(&coords);
             let nc = coarse_coords.len();
             if 2 * nc > a.n {
                 break; // aggregation no longer coarsens (a thin sliver): solve directly here

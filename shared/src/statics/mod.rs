@@ -7,7 +7,6 @@
 //! `docs/explanation/physics.md` for the model, the measured solver comparison and the accuracy
 //! tests.
 
-mod aggregate;
 mod amg;
 mod bsr;
 mod direct;
