@@ -12,8 +12,9 @@ rm -rf "$venv"
 "$venv/bin/pip" install --quiet --upgrade pip
 # The package is built with the dev profile, whose crates `cargo test` just compiled with the same
 # features (shared/Cargo.toml says how): only pyo3, numpy and the module compile, about 20 s, where
-# the release build a user's `pip install ./python` makes takes minutes here. Same code; the tests
-# take about a third longer on it (80 s against 60 s, 2026-12-06, 2-core Xeon).
+# the release build a user's `pip install ./python` makes takes minutes here. Same code, and the
+# dev profile compiles the physics as release does (Cargo.toml): the tests took 83 s (2026-12-07,
+# 2-core AMD EPYC).
 MATURIN_PEP517_ARGS="--profile dev" "$venv/bin/pip" install --quiet "./python[test,examples]"
 # The tests run from the package's own folder, against the installed wheel (not the sources),
 # and compare with the worker that cargo test just built.
