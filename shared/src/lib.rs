@@ -6,6 +6,7 @@
 pub mod dynamics;
 pub mod export;
 pub mod genome;
+pub mod heap;
 pub mod material;
 pub mod outcome;
 pub mod report;

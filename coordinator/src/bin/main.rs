@@ -143,6 +143,7 @@ fn parse_override(text: &str) -> Result<Override, String> {
 }
 
 fn main() -> std::process::ExitCode {
+    amorph::heap::keep_freed_memory();
     // One line per error, causes joined with ': ', so a bad config reads as a single message.
     match try_main(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -160,6 +160,7 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
+    amorph::heap::keep_freed_memory();
     match try_main(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
