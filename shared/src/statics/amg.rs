@@ -10,7 +10,7 @@
 //! hierarchy is built in double precision; the V-cycle runs on single-precision copies of its
 //! matrices and vectors (`single.rs`: it is memory-bound, and a preconditioner need not be exact).
 
-use super::bsr::{BlockMatrix, RowByRow, block_gemm_add};
+use super::bsr::{BlockMatrix, DistinctBlocks, RowByRow, block_gemm_add};
 use super::direct::DirectFactor;
 use super::element::Block;
 use super::error::Result;
@@ -24,7 +24,7 @@ use super::wide::with_wide_vectors;
 #[derive(Debug)]
 struct Level {
     a: BlockMatrix32,
-    inverse_diagonal: Vec<Block32>,
+    inverse_diagonal: DistinctBlocks<Block32>,
     /// Prolongator to the next level (fine rows × coarse columns) and its transpose.
     p: BlockMatrix32,
     r: BlockMatrix32,
@@ -136,7 +136,11 @@ fn orthonormalise(
 
 /// λ_max(D⁻¹A) by power iteration from a fixed start vector (deterministic), on the single-
 /// precision copies: the prolongator smoothing needs it to ~10 %, and it is memory-bound.
-fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: usize) -> f64 {
+fn spectral_radius(
+    a: &BlockMatrix32,
+    inverse_diagonal: &DistinctBlocks<Block32>,
+    iterations: usize,
+) -> f64 {
     let n = 6 * a.n;
     let mut v: Vec<f32> = (0..n).map(|i| 1.0 + (i % 7) as f32 / 7.0).collect();
     let mut w = vec![0.0; n];
@@ -150,9 +154,9 @@ fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: 
         v.iter_mut()
             .for_each(|x| *x = (f64::from(*x) / norm) as f32);
         a.mul_vec(&v, &mut w);
-        for (inv, wr) in inverse_diagonal.iter().zip(w.chunks_exact_mut(6)) {
+        for (row, wr) in w.chunks_exact_mut(6).enumerate() {
             let mut acc = [0.0; 6];
-            block32_mul_add(inv, wr, &mut acc);
+            block32_mul_add(inverse_diagonal.get(row), wr, &mut acc);
             wr.copy_from_slice(&acc);
         }
         lambda = w
@@ -169,7 +173,7 @@ fn spectral_radius(a: &BlockMatrix32, inverse_diagonal: &[Block32], iterations: 
 /// node's aggregate.
 fn smoothed_prolongator(
     a: &BlockMatrix,
-    inverse_diagonal: &[Block],
+    inverse_diagonal: &DistinctBlocks,
     q: &[Block],
     aggregate_of: &[u32],
     omega: f64,
@@ -183,7 +187,7 @@ fn smoothed_prolongator(
 #[inline(always)]
 fn smoothed_rows(
     a: &BlockMatrix,
-    inverse_diagonal: &[Block],
+    inverse_diagonal: &DistinctBlocks,
     q: &[Block],
     aggregate_of: &[u32],
     omega: f64,
@@ -207,7 +211,7 @@ fn smoothed_rows(
         let own = aggregate_of[i];
         for (c, ap) in row.iter_mut() {
             let mut smoothed = [0.0; 36];
-            block_gemm_add(&inverse_diagonal[i], ap, &mut smoothed);
+            block_gemm_add(inverse_diagonal.get(i), ap, &mut smoothed);
             for (o, s) in ap.iter_mut().zip(smoothed) {
                 *o = -omega * s;
             }
@@ -246,7 +250,7 @@ impl Multigrid {
             }
             let inverse_diagonal = inverse_diagonal_blocks(a)?;
             let a32 = BlockMatrix32::from_f64(a);
-            let inverse_diagonal32: Vec<Block32> = inverse_diagonal.iter().map(block32).collect();
+            let inverse_diagonal32 = inverse_diagonal.map(block32);
             let lambda = spectral_radius(&a32, &inverse_diagonal32, params.power_iterations);
             let omega = params.prolongator_damping / lambda;
             let (q, coarse_modes) = orthonormalise(&modes, &aggregate_of, nc);

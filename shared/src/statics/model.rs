@@ -182,6 +182,16 @@ impl StaticModel {
         )
     }
 
+    /// What a link's blocks depend on besides its nodes: its axis and its two stiffnesses (bits).
+    /// Links of one kind have the same blocks, bit for bit.
+    pub(crate) fn link_kind(&self, link: usize) -> (u8, u64, u64) {
+        (
+            self.link_axis[link],
+            self.link_bend[link].to_bits(),
+            self.link_twist[link].to_bits(),
+        )
+    }
+
     /// The unreduced global stiffness in SI units (forces in N, moments in N·m per m and per rad)
     /// as `(row, col, value)` triplets with DOF `6 * node + k`, duplicates summed by the reader.
     /// For tests and exports; the solver never forms it.

@@ -1,6 +1,6 @@
 //! Preconditioned conjugate gradients on the scaled system, stopped on the true SI residual.
 
-use super::bsr::{BlockMatrix, block_mul_add, invert_spd_block};
+use super::bsr::{BlockMatrix, DistinctBlocks, block_mul_add, invert_spd_block};
 use super::error::{Result, StaticsError};
 use super::system::ReducedSystem;
 use super::wide::with_wide_vectors;
@@ -14,7 +14,7 @@ pub(crate) trait Precondition {
 /// The inverse of every 6×6 diagonal block.
 #[derive(Debug)]
 pub(crate) struct BlockJacobi {
-    inverse_diagonal: Vec<[f64; 36]>,
+    inverse_diagonal: DistinctBlocks,
 }
 
 impl BlockJacobi {
@@ -25,32 +25,52 @@ impl BlockJacobi {
     }
 }
 
-/// Inverse of each diagonal block; a block that is not SPD means a node without stiffness.
-pub(crate) fn inverse_diagonal_blocks(matrix: &BlockMatrix) -> Result<Vec<[f64; 36]>> {
-    matrix
-        .diagonal_positions()
-        .into_iter()
-        .enumerate()
-        .map(|(r, p)| {
-            invert_spd_block(&matrix.blocks[p]).ok_or_else(|| {
-                StaticsError::Factorization(format!(
-                    "diagonal block of row {r} is not positive definite"
-                ))
-            })
-        })
-        .collect()
+/// Inverse of each row's diagonal block, each distinct block inverted once; a block that is not
+/// SPD means a node without stiffness.
+pub(crate) fn inverse_diagonal_blocks(matrix: &BlockMatrix) -> Result<DistinctBlocks> {
+    let positions = matrix.diagonal_positions();
+    let diagonal = match &matrix.distinct {
+        Some(d) => {
+            // Renumbered so that only the blocks on the diagonal are inverted.
+            let mut renumbered = vec![u32::MAX; d.blocks.len()];
+            let mut diagonal = DistinctBlocks::default();
+            for &p in &positions {
+                let k = d.index[p] as usize;
+                if renumbered[k] == u32::MAX {
+                    renumbered[k] = diagonal.blocks.len() as u32;
+                    diagonal.blocks.push(d.blocks[k]);
+                }
+                diagonal.index.push(renumbered[k]);
+            }
+            diagonal
+        }
+        None => DistinctBlocks::whole(positions.iter().map(|&p| matrix.blocks[p]).collect()),
+    };
+    let mut inverse = Vec::with_capacity(diagonal.blocks.len());
+    for (k, block) in diagonal.blocks.iter().enumerate() {
+        let Some(block) = invert_spd_block(block) else {
+            let row = diagonal
+                .index
+                .iter()
+                .position(|&i| i as usize == k)
+                .unwrap_or(k);
+            return Err(StaticsError::Factorization(format!(
+                "diagonal block of row {row} is not positive definite"
+            )));
+        };
+        inverse.push(block);
+    }
+    Ok(DistinctBlocks {
+        blocks: inverse,
+        index: diagonal.index,
+    })
 }
 
 impl Precondition for BlockJacobi {
     fn apply(&mut self, r: &[f64], z: &mut [f64]) {
-        for ((inv, r), z) in self
-            .inverse_diagonal
-            .iter()
-            .zip(r.chunks_exact(6))
-            .zip(z.chunks_exact_mut(6))
-        {
+        for (row, (r, z)) in r.chunks_exact(6).zip(z.chunks_exact_mut(6)).enumerate() {
             let mut acc = [0.0; 6];
-            block_mul_add(inv, r, &mut acc);
+            block_mul_add(self.inverse_diagonal.get(row), r, &mut acc);
             z.copy_from_slice(&acc);
         }
     }

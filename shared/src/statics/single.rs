@@ -4,9 +4,10 @@
 //! definite operator, not to be exact, and the outer compensated refinement (`solve.rs`) keeps
 //! the answer at the requested residual. Its cost is memory traffic — each iteration streams
 //! the fine matrix three times and the coarse ones as often, ~115 MB per iteration at 12×12×40 —
-//! so storing its matrices and vectors in `f32` halves what it reads.
+//! so storing its matrices and vectors in `f32` halves what it reads, and the fine matrix's
+//! repeated blocks are read from one small table ([`super::bsr::DistinctBlocks`]).
 
-use super::bsr::BlockMatrix;
+use super::bsr::{BlockMatrix, DistinctBlocks};
 use super::element::Block;
 use super::wide::with_wide_vectors;
 
@@ -15,13 +16,14 @@ use super::wide::with_wide_vectors;
 /// across each row.
 pub(crate) type Block32 = [f32; 36];
 
-/// A block sparse row matrix in single precision (see [`BlockMatrix`]).
+/// A block sparse row matrix in single precision (see [`BlockMatrix`]), each distinct block
+/// stored once where the double matrix knows them.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct BlockMatrix32 {
     pub n: usize,
     row_ptr: Vec<u32>,
     cols: Vec<u32>,
-    blocks: Vec<Block32>,
+    blocks: DistinctBlocks<Block32>,
 }
 
 /// The row-major double block rounded to single precision, stored by columns.
@@ -54,7 +56,10 @@ impl BlockMatrix32 {
             n: a.n,
             row_ptr: a.row_ptr.iter().map(|&p| p as u32).collect(),
             cols: a.cols.clone(),
-            blocks: a.blocks.iter().map(block32).collect(),
+            blocks: match &a.distinct {
+                Some(distinct) => distinct.map(block32),
+                None => DistinctBlocks::whole(a.blocks.iter().map(block32).collect()),
+            },
         }
     }
 
@@ -85,24 +90,26 @@ impl BlockMatrix32 {
             n: ncols,
             row_ptr,
             cols,
-            blocks,
+            blocks: DistinctBlocks::whole(blocks),
         }
     }
 
+    /// Row `r`'s block columns and blocks.
     #[inline(always)]
-    pub fn row(&self, r: usize) -> (&[u32], &[Block32]) {
+    pub fn row(&self, r: usize) -> impl Iterator<Item = (usize, &Block32)> {
         let range = self.row_ptr[r] as usize..self.row_ptr[r + 1] as usize;
-        (&self.cols[range.clone()], &self.blocks[range])
+        self.cols[range.clone()]
+            .iter()
+            .zip(range)
+            .map(|(&c, k)| (c as usize, self.blocks.get(k)))
     }
 
     /// Row `r` of A x.
     #[inline(always)]
     fn row_product(&self, r: usize, x: &[f32]) -> [f32; 6] {
-        let (cols, blocks) = self.row(r);
         let mut acc = [0.0; 6];
-        for (&c, b) in cols.iter().zip(blocks) {
-            let c = 6 * c as usize;
-            block32_mul_add(b, &x[c..c + 6], &mut acc);
+        for (c, b) in self.row(r) {
+            block32_mul_add(b, &x[6 * c..6 * c + 6], &mut acc);
         }
         acc
     }
@@ -155,7 +162,7 @@ impl BlockMatrix32 {
     /// diagonal blocks `inverse_diagonal`.
     pub fn gauss_seidel(
         &self,
-        inverse_diagonal: &[Block32],
+        inverse_diagonal: &DistinctBlocks<Block32>,
         b: &[f32],
         x: &mut [f32],
         backward: bool,
@@ -169,7 +176,7 @@ impl BlockMatrix32 {
     #[inline(always)]
     fn gauss_seidel_pass(
         &self,
-        inverse_diagonal: &[Block32],
+        inverse_diagonal: &DistinctBlocks<Block32>,
         b: &[f32],
         x: &mut [f32],
         backward: bool,
@@ -187,18 +194,22 @@ impl BlockMatrix32 {
 
     /// Solves row `i` for its six unknowns, the other rows' held.
     #[inline(always)]
-    fn relax(&self, inverse_diagonal: &[Block32], b: &[f32], x: &mut [f32], i: usize) {
-        let (cols, blocks) = self.row(i);
+    fn relax(
+        &self,
+        inverse_diagonal: &DistinctBlocks<Block32>,
+        b: &[f32],
+        x: &mut [f32],
+        i: usize,
+    ) {
         let mut acc = [0.0; 6];
-        for (&c, block) in cols.iter().zip(blocks) {
-            let c = c as usize;
+        for (c, block) in self.row(i) {
             if c != i {
                 block32_mul_add(block, &x[6 * c..6 * c + 6], &mut acc);
             }
         }
         let r: [f32; 6] = std::array::from_fn(|k| b[6 * i + k] - acc[k]);
         let mut xi = [0.0; 6];
-        block32_mul_add(&inverse_diagonal[i], &r, &mut xi);
+        block32_mul_add(inverse_diagonal.get(i), &r, &mut xi);
         x[6 * i..6 * i + 6].copy_from_slice(&xi);
     }
 }
@@ -252,10 +263,10 @@ mod tests {
         let r = BlockMatrix32::transpose_from_f64(&p, ncols);
         assert_eq!(r.n, ncols);
         for (big_i, row) in transposed.iter().enumerate() {
-            let (cols, blocks) = r.row(big_i);
-            let expected_cols: Vec<u32> = row.iter().map(|(c, _)| *c).collect();
-            assert_eq!(cols, expected_cols.as_slice());
-            for (b, (_, t)) in blocks.iter().zip(row) {
+            let stored: Vec<(usize, &Block32)> = r.row(big_i).collect();
+            assert_eq!(stored.len(), row.len());
+            for ((c, b), (expected_c, t)) in stored.into_iter().zip(row) {
+                assert_eq!(c, *expected_c as usize);
                 assert_eq!(b.map(f32::to_bits), block32(t).map(f32::to_bits));
             }
         }

@@ -61,6 +61,7 @@ fn coarse_pattern(a: &BlockMatrix, p: &BlockMatrix, ncols: usize) -> BlockMatrix
     }
     let blocks = vec![[0.0; 36]; cols.len()];
     BlockMatrix {
+        distinct: None,
         n: ncols,
         row_ptr,
         cols,
@@ -186,6 +187,7 @@ mod tests {
             row_ptr,
             cols,
             blocks,
+            distinct: None,
         }
     }
 
@@ -262,6 +264,7 @@ mod tests {
             // Σ|terms| of every entry, which bounds the rounding of any order of summation.
             let absolute = |m: &BlockMatrix| BlockMatrix {
                 blocks: m.blocks.iter().map(|b| b.map(f64::abs)).collect(),
+                distinct: None,
                 ..m.clone()
             };
             let magnitudes = two_products(&absolute(&a), &absolute(&p), nc);
