@@ -42,6 +42,15 @@ impl ReducedSystem {
         // of k + side over its links names it too: equal lists, equal bits.
         let mut distinct = DistinctBlocks::default();
         let mut kind_of: HashMap<(u8, u64, u64), u32> = HashMap::new();
+        let off_diagonal_of: Vec<u32> = (0..model.link_count())
+            .map(|link| {
+                *kind_of.entry(model.link_kind(link)).or_insert_with(|| {
+                    let off = model.link_block(link, 1);
+                    distinct.blocks.extend([off, transpose(&off)]);
+                    distinct.blocks.len() as u32 - 2
+                })
+            })
+            .collect();
         let mut diagonal_of: HashMap<[u32; 6], u32> = HashMap::new();
         let mut row: Vec<(u32, u32)> = Vec::with_capacity(7);
         for &node in &free_nodes {
@@ -53,11 +62,7 @@ impl ReducedSystem {
             for (slot, &link) in recipe.iter_mut().zip(links) {
                 let link = link as usize;
                 let [i, j] = model.link_nodes(link);
-                let kind = *kind_of.entry(model.link_kind(link)).or_insert_with(|| {
-                    let off = model.link_block(link, 1);
-                    distinct.blocks.extend([off, transpose(&off)]);
-                    distinct.blocks.len() as u32 - 2
-                });
+                let kind = off_diagonal_of[link];
                 let side = u32::from(i != node);
                 *slot = kind + side;
                 let other = if side == 0 { j } else { i };
